@@ -1,0 +1,41 @@
+# Strict warnings (as errors) for the project's own targets only; sanitizers
+# for the whole build when SHAPESENSE_SANITIZE is on.
+
+add_library(shapesense_warnings INTERFACE)
+target_compile_options(shapesense_warnings INTERFACE
+  -Wall -Wextra -Wpedantic -Wshadow -Wnon-virtual-dtor -Wold-style-cast
+  -Wcast-align -Woverloaded-virtual -Wnull-dereference -Wimplicit-fallthrough
+  -Werror)
+
+if(SHAPESENSE_SANITIZE)
+  add_compile_options(-fsanitize=address,undefined -fno-omit-frame-pointer -fno-sanitize-recover=undefined)
+  add_link_options(-fsanitize=address,undefined)
+endif()
+
+# shapesense_library(NAME SOURCES ... DEPS ...): one library target per folder.
+function(shapesense_library name)
+  cmake_parse_arguments(ARG "" "" "SOURCES;DEPS;PRIVATE_DEPS" ${ARGN})
+  add_library(${name} ${ARG_SOURCES})
+  target_include_directories(${name} PUBLIC ${PROJECT_SOURCE_DIR})
+  target_link_libraries(${name} PUBLIC ${ARG_DEPS} PRIVATE shapesense_warnings ${ARG_PRIVATE_DEPS})
+endfunction()
+
+# shapesense_executable(NAME SOURCES ... DEPS ...)
+function(shapesense_executable name)
+  cmake_parse_arguments(ARG "" "" "SOURCES;DEPS" ${ARGN})
+  add_executable(${name} ${ARG_SOURCES})
+  target_link_libraries(${name} PRIVATE shapesense_warnings ${ARG_DEPS})
+endfunction()
+
+# shapesense_test(NAME SOURCES ... DEPS ... [LABELS ...]): one gtest executable,
+# registered with CTest test by test.
+function(shapesense_test name)
+  cmake_parse_arguments(ARG "" "TIMEOUT" "SOURCES;DEPS;LABELS" ${ARGN})
+  add_executable(${name} ${ARG_SOURCES})
+  target_link_libraries(${name} PRIVATE shapesense_warnings GTest::gtest GTest::gtest_main GTest::gmock ${ARG_DEPS})
+  target_compile_definitions(${name} PRIVATE SHAPESENSE_SOURCE_DIR="${PROJECT_SOURCE_DIR}")
+  if(NOT ARG_TIMEOUT)
+    set(ARG_TIMEOUT 600)
+  endif()
+  gtest_discover_tests(${name} DISCOVERY_TIMEOUT 60 PROPERTIES TIMEOUT ${ARG_TIMEOUT} LABELS "${ARG_LABELS}")
+endfunction()
