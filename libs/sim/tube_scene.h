@@ -1,0 +1,92 @@
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <opencv2/core.hpp>
+#include <string>
+#include <vector>
+
+#include "libs/camera/camera.h"
+#include "libs/geometry/types.h"
+
+namespace shapesense {
+
+// A band of coloured tape around the tube.
+struct TapeBand {
+  double center_arc_length = 0.0;  // from the base, mm
+  double width = 4.0;              // along the tube, mm
+  std::array<uint8_t, 3> bgr = {30, 30, 200};
+};
+
+// A tube of constant radius swept along a centreline, with a hemispherical
+// tip. The centreline starts at the base (where the manipulator enters the
+// workspace); a straight lead-in behind the base is drawn but is not part of
+// the measured body (it stands for the sheath or mount the tube comes from).
+struct TubeScene {
+  Polyline centerline;  // base → tip, world frame, mm; sampled finely (≤ 0.5 mm)
+  double radius = 3.0;  // mm
+  double lead_in_length = 40.0;  // mm, straight, behind the base
+  std::vector<TapeBand> tapes;
+};
+
+// What the cameras should measure.
+struct GroundTruth {
+  Polyline centerline;  // as in the scene, base → tip
+  Vec3 tip = Vec3::Zero();  // distal end of the centreline (centre of the hemispherical tip)
+  double length = 0.0;      // mm
+  std::vector<Vec3> markers;  // tape centres on the centreline, base → tip
+  std::vector<double> marker_arc_length;
+};
+
+GroundTruth TruthOf(const TubeScene& scene);
+
+struct RenderOptions {
+  std::array<double, 3> backdrop_bgr = {40.0, 175.0, 45.0};
+  // Brightness falls off from the image centre to the corners by this fraction.
+  double backdrop_vignette = 0.15;
+  std::array<double, 3> body_bgr = {70.0, 70.0, 75.0};
+  // Lambertian shading: ambient + diffuse × max(0, n·l), with a light from this direction (world).
+  std::array<double, 3> light_direction = {0.3, -0.5, 1.0};
+  double ambient = 0.55;
+  double diffuse = 0.6;
+  // Gaussian pixel noise, grey levels (standard deviation).
+  double noise_sigma = 2.0;
+  // Soft shadow of the tube on the backdrop: darkening factor (0: none),
+  // offset in the image, px, and blur, px.
+  double shadow_strength = 0.35;
+  std::array<double, 2> shadow_offset_px = {14.0, 10.0};
+  double shadow_blur_px = 6.0;
+  // Anti-aliasing: edge pixels are covered in proportion to the tube's area in them.
+  bool antialias = true;
+
+  template <class Visitor>
+  void VisitFields(Visitor&& visit) {
+    visit("backdrop_bgr", backdrop_bgr, "backdrop colour, BGR 0-255");
+    visit("backdrop_vignette", backdrop_vignette, "brightness fall-off to the corners (0-1)");
+    visit("body_bgr", body_bgr, "tube colour, BGR 0-255");
+    visit("light_direction", light_direction, "direction towards the light, world frame");
+    visit("ambient", ambient, "ambient light (0-2)");
+    visit("diffuse", diffuse, "diffuse light (0-2)");
+    visit("noise_sigma", noise_sigma, "pixel noise, grey levels");
+    visit("shadow_strength", shadow_strength, "shadow darkening (0: none, < 1)");
+    visit("shadow_offset_px", shadow_offset_px, "shadow offset in the image, px");
+    visit("shadow_blur_px", shadow_blur_px, "shadow blur, px");
+    visit("antialias", antialias, "anti-aliased edges");
+  }
+  std::string Validate() const;
+};
+
+// One camera's rendering: the frame, a background frame (backdrop alone, its
+// own noise), and the exact mask of the tube (the measured body and the lead-in).
+struct RenderedView {
+  cv::Mat image;       // CV_8UC3 BGR
+  cv::Mat background;  // CV_8UC3 BGR
+  cv::Mat truth_mask;  // CV_8U, 255 where the tube covers the pixel centre
+};
+
+// Renders the scene into every camera of the rig (in rig order), with lens
+// distortion. Deterministic for a given seed.
+std::vector<RenderedView> RenderScene(const Rig& rig, const TubeScene& scene,
+                                      const RenderOptions& options, uint32_t seed);
+
+}  // namespace shapesense
