@@ -1,0 +1,27 @@
+// shapesense: the command-line tools. Each subcommand lives in its own file
+// as AddXCommand(app) over a testable RunX(...).
+#include <CLI/CLI.hpp>
+#include <iostream>
+
+#include "clients/tools/demo_command.h"
+#include "clients/tools/offline_command.h"
+#include "libs/core/error.h"
+
+int main(int argc, char** argv) {
+  CLI::App app{"shapesense: 3-D shape sensing of continuum manipulators"};
+  app.require_subcommand(1);
+  shapesense::AddOfflineCommand(app);
+  shapesense::AddDemoCommand(app);
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e);
+  } catch (const shapesense::InputError& e) {
+    std::cerr << "shapesense: error: " << e.what() << '\n';
+    return 2;
+  } catch (const std::exception& e) {
+    std::cerr << "shapesense: failed: " << e.what() << '\n';
+    return 1;
+  }
+  return 0;
+}

@@ -1,0 +1,13 @@
+#!/usr/bin/env bash
+# Configures and builds one build tree: deploy/build.sh [release|asan].
+set -euo pipefail
+ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+KIND="${1:-release}"
+JOBS="${JOBS:-$(nproc)}"
+case "$KIND" in
+  release) DIR="$ROOT/build"; FLAGS=(-DCMAKE_BUILD_TYPE=Release) ;;
+  asan) DIR="$ROOT/build-asan"; FLAGS=(-DCMAKE_BUILD_TYPE=RelWithDebInfo -DSHAPESENSE_SANITIZE=ON -DSHAPESENSE_BUILD_BENCH=OFF) ;;
+  *) echo "usage: deploy/build.sh [release|asan]" >&2; exit 2 ;;
+esac
+cmake -S "$ROOT" -B "$DIR" -G Ninja "${FLAGS[@]}" > /dev/null
+ninja -C "$DIR" -j "$JOBS"
