@@ -39,13 +39,13 @@ void Unite(std::vector<int>& parent, int a, int b) {
 // Joins each run of a row with the runs of the row above that it touches,
 // diagonals included (8-connectivity): [a0, a1) and [b0, b1) touch when
 // a0 <= b1 and b0 <= a1.
-void UniteAdjacentRows(const std::vector<Run>& runs, int above_begin, int above_end, int begin,
+void UniteAdjacentRows(const std::vector<RowRun>& runs, int above_begin, int above_end, int begin,
                        int end, std::vector<int>& parent) {
   int above = above_begin;
   int here = begin;
   while (above < above_end && here < end) {
-    const Run& a = runs[above];
-    const Run& b = runs[here];
+    const RowRun& a = runs[above];
+    const RowRun& b = runs[here];
     if (a.x0 <= b.x1 && b.x0 <= a.x1) Unite(parent, above, here);
     if (a.x1 < b.x1) {
       ++above;
@@ -76,8 +76,8 @@ void ExtractRuns(const BitMask& mask, RunImage* out) {
 }
 
 void KeepManipulatorComponents(const RunImage& image, int64_t min_area, ComponentScratch* scratch,
-                               std::vector<Run>* kept) {
-  const std::vector<Run>& runs = image.runs;
+                               std::vector<RowRun>* kept) {
+  const std::vector<RowRun>& runs = image.runs;
   const int count = static_cast<int>(runs.size());
   std::vector<int>& parent = scratch->parent;
   parent.resize(count);

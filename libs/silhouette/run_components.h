@@ -8,7 +8,7 @@
 namespace shapesense {
 
 // Pixels [x0, x1) of row y.
-struct Run {
+struct RowRun {
   int y = 0;
   int x0 = 0;
   int x1 = 0;
@@ -17,7 +17,7 @@ struct Run {
 // The foreground of a binary image as runs in raster order; the runs of row y
 // are runs[row_begin[y]] … runs[row_begin[y + 1] - 1].
 struct RunImage {
-  std::vector<Run> runs;
+  std::vector<RowRun> runs;
   std::vector<int> row_begin;
 };
 
@@ -35,6 +35,6 @@ struct ComponentScratch {
 // runs, so the cost follows the foreground, not the image. `kept` is in raster
 // order.
 void KeepManipulatorComponents(const RunImage& runs, int64_t min_area, ComponentScratch* scratch,
-                               std::vector<Run>* kept);
+                               std::vector<RowRun>* kept);
 
 }  // namespace shapesense
