@@ -2,6 +2,7 @@
 
 #include <array>
 #include <cstdint>
+#include <memory>
 #include <opencv2/core.hpp>
 #include <string>
 #include <vector>
@@ -23,40 +24,54 @@ struct TapeBand {
 // workspace); a straight lead-in behind the base is drawn but is not part of
 // the measured body (it stands for the sheath or mount the tube comes from).
 struct TubeScene {
-  Polyline centerline;  // base → tip, world frame, mm; sampled finely (≤ 0.5 mm)
-  double radius = 3.0;  // mm
+  Polyline centerline;           // base → tip, world frame, mm; sampled finely (≤ 0.5 mm)
+  double radius = 3.0;           // mm
   double lead_in_length = 40.0;  // mm, straight, behind the base
   std::vector<TapeBand> tapes;
 };
 
 // What the cameras should measure.
 struct GroundTruth {
-  Polyline centerline;  // as in the scene, base → tip
-  Vec3 tip = Vec3::Zero();  // distal end of the centreline (centre of the hemispherical tip)
-  double length = 0.0;      // mm
+  Polyline centerline;        // as in the scene, base → tip
+  Vec3 tip = Vec3::Zero();    // distal end of the centreline (centre of the hemispherical tip)
+  double length = 0.0;        // mm
   std::vector<Vec3> markers;  // tape centres on the centreline, base → tip
   std::vector<double> marker_arc_length;
 };
 
 GroundTruth TruthOf(const TubeScene& scene);
 
+// How the scene looks. The tube is the union of capsules (sphere-swept
+// segments) around the lead-in and the centreline, ray-cast exactly per pixel
+// centre through the lens model. The default colours suit the silhouette
+// extractor's defaults with margin: the body's and the tapes' green stay at
+// least 75 grey levels below the (vignetted) backdrop's under any shading; the
+// tapes pass its red test (red > 90 and > 1.8 × green and blue) everywhere;
+// the shadow only scales the backdrop's colour, so its hue does not change.
 struct RenderOptions {
   std::array<double, 3> backdrop_bgr = {40.0, 175.0, 45.0};
   // Brightness falls off from the image centre to the corners by this fraction.
   double backdrop_vignette = 0.15;
-  std::array<double, 3> body_bgr = {70.0, 70.0, 75.0};
-  // Lambertian shading: ambient + diffuse × max(0, n·l), with a light from this direction (world).
+  // The tube between tapes (the tapes carry their own colour).
+  std::array<double, 3> body_bgr = {60.0, 60.0, 65.0};
+  // Lambertian shading of body and tapes: ambient + diffuse × max(0, n·l),
+  // with a light from this direction (world).
   std::array<double, 3> light_direction = {0.3, -0.5, 1.0};
   double ambient = 0.55;
   double diffuse = 0.6;
-  // Gaussian pixel noise, grey levels (standard deviation).
+  // Gaussian pixel noise, grey levels (standard deviation), drawn per channel,
+  // independently for the frame and for the background.
   double noise_sigma = 2.0;
-  // Soft shadow of the tube on the backdrop: darkening factor (0: none),
-  // offset in the image, px, and blur, px.
+  // Soft shadow of the tube on the backdrop (not on the tube): the backdrop is
+  // scaled by 1 - strength × the tube's coverage shifted by the offset (px)
+  // and blurred by a Gaussian of this standard deviation (px).
   double shadow_strength = 0.35;
   std::array<double, 2> shadow_offset_px = {14.0, 10.0};
   double shadow_blur_px = 6.0;
-  // Anti-aliasing: edge pixels are covered in proportion to the tube's area in them.
+  // Anti-aliasing: a pixel near the outline is covered in proportion to its
+  // area on the tube's side of a straight outline at the exact sub-pixel
+  // position (from the ray's distance to the axis), and blends the shaded tube
+  // with the backdrop accordingly. Off: each pixel is tube or backdrop by its centre.
   bool antialias = true;
 
   template <class Visitor>
@@ -77,7 +92,9 @@ struct RenderOptions {
 };
 
 // One camera's rendering: the frame, a background frame (backdrop alone, its
-// own noise), and the exact mask of the tube (the measured body and the lead-in).
+// own noise, no tube, no shadow), and the exact mask of the tube (the measured
+// body and the lead-in): a pixel is in it when the ray through its centre
+// meets the tube.
 struct RenderedView {
   cv::Mat image;       // CV_8UC3 BGR
   cv::Mat background;  // CV_8UC3 BGR
@@ -85,8 +102,28 @@ struct RenderedView {
 };
 
 // Renders the scene into every camera of the rig (in rig order), with lens
-// distortion. Deterministic for a given seed.
+// distortion. Deterministic for a given seed. Throws std::invalid_argument on
+// options that fail Validate() or a scene without centreline or radius.
 std::vector<RenderedView> RenderScene(const Rig& rig, const TubeScene& scene,
                                       const RenderOptions& options, uint32_t seed);
+
+// Renders scene after scene for one rig, keeping between calls what depends on
+// the cameras alone (every pixel's viewing ray, about a third of the work).
+// RenderScene is a SceneRenderer used once; both give identical images.
+// Render() may be called from several threads at once.
+class SceneRenderer {
+ public:
+  explicit SceneRenderer(const Rig& rig);
+  ~SceneRenderer();
+  SceneRenderer(SceneRenderer&&) noexcept;
+  SceneRenderer& operator=(SceneRenderer&&) noexcept;
+
+  std::vector<RenderedView> Render(const TubeScene& scene, const RenderOptions& options,
+                                   uint32_t seed) const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
 
 }  // namespace shapesense
