@@ -19,7 +19,9 @@ struct VoxelGrid {
   static VoxelGrid Covering(const Vec3& min, const Vec3& max, double voxel_size);
 
   int64_t NumVoxels() const { return int64_t{dims[0]} * dims[1] * dims[2]; }
-  int64_t Index(int x, int y, int z) const { return x + int64_t{dims[0]} * (y + int64_t{dims[1]} * z); }
+  int64_t Index(int x, int y, int z) const {
+    return x + int64_t{dims[0]} * (y + int64_t{dims[1]} * z);
+  }
   std::array<int, 3> Coordinates(int64_t index) const;
   Vec3 Center(int x, int y, int z) const { return origin + voxel_size * Vec3(x, y, z); }
   Vec3 Center(int64_t index) const;
