@@ -60,12 +60,13 @@ nlohmann::json TruthToJson(const std::string& frame, const GroundTruth& truth) {
 std::map<std::string, GroundTruth> RenderDataset(const DemoArgs& args, const Rig& rig,
                                                  const fs::path& root) {
   const RenderOptions render;
+  const SceneRenderer renderer(rig);
   std::map<std::string, GroundTruth> truths;
   std::string truth_lines;
   ProgressBar bar("rendering", args.progress);
   for (int i = 0; i < args.frames; ++i) {
     const TubeScene scene = DemoScene(rig, i, args.frames);
-    const std::vector<RenderedView> views = RenderScene(rig, scene, render, args.seed + static_cast<uint32_t>(i));
+    const std::vector<RenderedView> views = renderer.Render(scene, render, args.seed + static_cast<uint32_t>(i));
     std::vector<cv::Mat> images;
     for (const RenderedView& view : views) images.push_back(view.image);
     if (i == 0) {

@@ -4,6 +4,7 @@
 #include <iostream>
 
 #include "clients/tools/demo_command.h"
+#include "clients/tools/estimate/estimate_command.h"
 #include "clients/tools/offline_command.h"
 #include "libs/core/error.h"
 
@@ -12,6 +13,7 @@ int main(int argc, char** argv) {
   app.require_subcommand(1);
   shapesense::AddOfflineCommand(app);
   shapesense::AddDemoCommand(app);
+  shapesense::AddEstimateCommand(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -1,0 +1,29 @@
+#pragma once
+
+// Every LCM channel of shapesense, in one place. A rig can run several
+// pipelines side by side on one LCM network by giving each a prefix
+// (e.g. "RIG2_"); the default prefix is empty.
+#include <string>
+
+namespace shapesense::channels {
+
+// Images of one camera: image_t.
+inline std::string Image(const std::string& camera) { return "SHAPESENSE_IMAGE_" + camera; }
+// Every camera's images: the LCM regular expression the carving service subscribes to.
+inline constexpr const char* kImagePattern = "SHAPESENSE_IMAGE_.*";
+// Silhouettes for monitoring, at a low rate: image_t (mono, 255 inside).
+inline std::string Silhouette(const std::string& camera) { return "SHAPESENSE_SILHOUETTE_" + camera; }
+// The visual hull of each frame-set: voxel_cloud_t.
+inline constexpr const char* kVoxels = "SHAPESENSE_VOXELS";
+// The measured shape: shape_t.
+inline constexpr const char* kShape = "SHAPESENSE_SHAPE";
+// The virtual rig's ground truth of each frame-set: shape_t.
+inline constexpr const char* kTruth = "SHAPESENSE_TRUTH";
+// Health of a service, 1 Hz: service_status_t.
+inline std::string Status(const std::string& service) { return "SHAPESENSE_STATUS_" + service; }
+inline constexpr const char* kStatusPattern = "SHAPESENSE_STATUS_.*";
+// Tendon commands and actuator state: tendon_command_t, tendon_state_t.
+inline constexpr const char* kTendonCommand = "SHAPESENSE_TENDON_COMMAND";
+inline constexpr const char* kTendonState = "SHAPESENSE_TENDON_STATE";
+
+}  // namespace shapesense::channels

@@ -1,0 +1,86 @@
+#pragma once
+
+#include <atomic>
+#include <cstdint>
+#include <functional>
+#include <lcm/lcm-cpp.hpp>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace shapesense {
+
+// LCM behind a small typed interface. Subscriptions decode the raw buffer
+// themselves so that a malformed message (wrong type, truncated, garbage) is
+// counted and reported instead of reaching the handler; handlers must never
+// throw (an exception escaping one is caught, counted, and dropped).
+class LcmBus {
+ public:
+  // `url`: an LCM provider URL, e.g. "udpm://239.255.76.67:7667?ttl=0" or
+  // "memq://"; empty uses LCM_DEFAULT_URL or LCM's default. Throws
+  // std::runtime_error when LCM cannot start (no multicast route, ...).
+  explicit LcmBus(const std::string& url = {});
+
+  template <class Message>
+  bool Publish(const std::string& channel, const Message& message) {
+    return lcm_.publish(channel, &message) == 0;
+  }
+
+  // Handler gets the decoded message, the channel it came on, and the receive
+  // time (µs since epoch). `channel` may be an LCM regular expression.
+  template <class Message>
+  void Subscribe(const std::string& channel,
+                 std::function<void(const Message&, const std::string&, int64_t)> handler) {
+    auto subscription = std::make_unique<Typed<Message>>(this, std::move(handler));
+    lcm_.subscribe(channel, &Typed<Message>::OnRaw, subscription.get());
+    subscriptions_.push_back(std::move(subscription));
+  }
+
+  // Handles messages for up to `timeout_ms`; returns the number handled (0 or 1),
+  // or -1 on an LCM error.
+  int Handle(int timeout_ms) { return lcm_.handleTimeout(timeout_ms); }
+
+  int64_t Rejected() const { return rejected_.load(); }
+  int64_t HandlerErrors() const { return handler_errors_.load(); }
+  const std::string& LastRejection() const { return last_rejection_; }
+
+ private:
+  struct SubscriptionBase {
+    virtual ~SubscriptionBase() = default;
+  };
+
+  template <class Message>
+  struct Typed : SubscriptionBase {
+    Typed(LcmBus* bus, std::function<void(const Message&, const std::string&, int64_t)> handler)
+        : bus_(bus), handler_(std::move(handler)) {}
+
+    void OnRaw(const lcm::ReceiveBuffer* buffer, const std::string& channel) {
+      Message message;
+      if (message.decode(buffer->data, 0, static_cast<int>(buffer->data_size)) < 0) {
+        bus_->Reject(channel, "not a valid " + std::string(Message::getTypeName()));
+        return;
+      }
+      try {
+        handler_(message, channel, buffer->recv_utime);
+      } catch (...) {
+        ++bus_->handler_errors_;
+      }
+    }
+
+    LcmBus* bus_;
+    std::function<void(const Message&, const std::string&, int64_t)> handler_;
+  };
+
+  void Reject(const std::string& channel, const std::string& why);
+
+  lcm::LCM lcm_;
+  std::vector<std::unique_ptr<SubscriptionBase>> subscriptions_;
+  std::atomic<int64_t> rejected_{0};
+  std::atomic<int64_t> handler_errors_{0};
+  std::string last_rejection_;
+};
+
+// Microseconds since the Unix epoch, the time base of every LCM message.
+int64_t NowUtime();
+
+}  // namespace shapesense

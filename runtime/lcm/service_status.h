@@ -1,0 +1,50 @@
+#pragma once
+
+#include <atomic>
+#include <cstdint>
+#include <mutex>
+#include <string>
+
+#include "runtime/lcm/lcm_bus.h"
+#include "shapesense/service_status_t.hpp"
+
+namespace shapesense {
+
+// Counters of one service, safe to bump from any thread, published at 1 Hz
+// on channels::Status(service) by MaybePublish.
+class ServiceStatus {
+ public:
+  explicit ServiceStatus(std::string service);
+
+  void Received(int64_t n = 1) { received_ += n; }
+  void Published(int64_t n = 1) { published_ += n; }
+  void Dropped(int64_t n = 1) { dropped_ += n; }
+  void Rejected(int64_t n = 1) { rejected_ += n; }
+  void Error(const std::string& what);
+  void SetQueueDepth(int depth) { queue_depth_ = depth; }
+
+  // Publishes when at least a second has passed since the last status;
+  // `bus_rejected` adds the bus's count of malformed messages.
+  void MaybePublish(LcmBus& bus, int64_t now_utime);
+  // The message as it would be published now (for tests and logs).
+  service_status_t Snapshot(int64_t now_utime, int64_t bus_rejected = 0);
+
+  int64_t received() const { return received_; }
+  int64_t published() const { return published_; }
+  int64_t dropped() const { return dropped_; }
+  int64_t errors() const { return errors_; }
+
+ private:
+  std::string service_;
+  std::string host_;
+  std::atomic<int64_t> received_{0}, published_{0}, dropped_{0}, rejected_{0}, errors_{0};
+  std::atomic<int> queue_depth_{0};
+  std::mutex mutex_;
+  std::string last_error_;
+  int64_t seq_ = 0;
+  int64_t last_utime_ = 0;
+  int64_t last_received_ = 0;
+  int64_t last_published_ = 0;
+};
+
+}  // namespace shapesense
