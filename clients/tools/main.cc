@@ -5,6 +5,7 @@
 
 #include "clients/tools/demo_command.h"
 #include "clients/tools/estimate/estimate_command.h"
+#include "clients/tools/monitor/monitor_command.h"
 #include "clients/tools/offline_command.h"
 #include "libs/core/error.h"
 
@@ -14,6 +15,7 @@ int main(int argc, char** argv) {
   shapesense::AddOfflineCommand(app);
   shapesense::AddDemoCommand(app);
   shapesense::AddEstimateCommand(app);
+  shapesense::AddMonitorCommand(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
