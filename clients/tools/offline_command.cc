@@ -64,7 +64,9 @@ cv::Mat MakeFrameOverlay(const Rig& rig, const std::vector<cv::Mat>& images,
   }
   const cv::Mat cameras = TileImages(views, 3);
   const cv::Mat orthogonal = DrawOrthogonalViews(result.cloud, result.shape, truth, cameras.cols / 3);
-  return TileImages({cameras, orthogonal}, 1);
+  cv::Mat picture;
+  cv::vconcat(cameras, orthogonal, picture);
+  return picture;
 }
 
 OfflineSummary RunOffline(const OfflineArgs& args, std::ostream& log, const FrameObserver& observer) {

@@ -68,14 +68,35 @@ struct View {
   const char* name;
 };
 
+// The square region of a view that holds the body with a margin, mm.
+struct ViewWindow {
+  double low_a = 0.0;
+  double low_b = 0.0;
+  double extent = 1.0;
+};
+
+ViewWindow FitWindow(const VoxelCloud& cloud, const ShapeEstimate& shape, const Polyline* truth,
+                     const View& view) {
+  Eigen::AlignedBox3d box;
+  for (const int32_t index : cloud.voxels) box.extend(cloud.grid.Center(int64_t{index}));
+  for (const Vec3& p : shape.centerline) box.extend(p);
+  if (truth != nullptr) {
+    for (const Vec3& p : *truth) box.extend(p);
+  }
+  if (box.isEmpty()) box.extend(cloud.grid.origin);
+  constexpr double kMargin = 15.0;  // mm
+  const Vec3 center = box.center();
+  const double extent = std::max(box.sizes()[view.a], box.sizes()[view.b]) + 2.0 * kMargin;
+  return {center[view.a] - extent / 2.0, center[view.b] - extent / 2.0, extent};
+}
+
 cv::Mat DrawView(const VoxelCloud& cloud, const ShapeEstimate& shape, const Polyline* truth,
                  const View& view, int size_px) {
   const VoxelGrid& grid = cloud.grid;
-  const Vec3 low = grid.origin - Vec3::Constant(grid.voxel_size / 2);
-  const Vec3 extent = grid.voxel_size * Vec3(grid.dims[0], grid.dims[1], grid.dims[2]);
-  const double scale = size_px / std::max(extent[view.a], extent[view.b]);
+  const ViewWindow window = FitWindow(cloud, shape, truth, view);
+  const double scale = size_px / window.extent;
   auto to_pixel = [&](const Vec3& p) {
-    return cv::Point2d((p[view.a] - low[view.a]) * scale, size_px - (p[view.b] - low[view.b]) * scale);
+    return cv::Point2d((p[view.a] - window.low_a) * scale, size_px - (p[view.b] - window.low_b) * scale);
   };
   cv::Mat canvas(size_px, size_px, CV_8UC3, cv::Scalar(30, 30, 30));
   const int dot = std::max(1, static_cast<int>(grid.voxel_size * scale));
