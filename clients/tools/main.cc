@@ -3,6 +3,7 @@
 #include <CLI/CLI.hpp>
 #include <iostream>
 
+#include "clients/tools/config_command.h"
 #include "clients/tools/demo_command.h"
 #include "clients/tools/estimate/estimate_command.h"
 #include "clients/tools/monitor/monitor_command.h"
@@ -14,6 +15,7 @@ int main(int argc, char** argv) {
   app.require_subcommand(1);
   shapesense::AddOfflineCommand(app);
   shapesense::AddDemoCommand(app);
+  shapesense::AddConfigCommand(app);
   shapesense::AddEstimateCommand(app);
   shapesense::AddMonitorCommand(app);
   try {

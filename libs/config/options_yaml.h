@@ -155,6 +155,7 @@ std::string OptionsToDocumentedYaml(const Options& options, int indent = 0) {
       out += pad + key + ":\n" + OptionsToDocumentedYaml(field, indent + 2);
     } else {
       YAML::Emitter emitter;
+      emitter.SetDoublePrecision(15);  // 0.3, not 0.29999999999999999, for people
       emitter << options_detail::Write(field);
       out += pad + key + ": " + emitter.c_str() + "\n";
     }
