@@ -18,6 +18,8 @@
 #include <yaml-cpp/yaml.h>
 
 #include <array>
+#include <iomanip>
+#include <sstream>
 #include <set>
 #include <string>
 #include <type_traits>
@@ -96,18 +98,25 @@ void Read(const YAML::Node& node, T& value, const std::string& source, const std
   }
 }
 
+// `readable`: doubles with 15 significant digits (0.3, not 0.29999999999999999),
+// for files people read; otherwise exact.
 template <class T>
-YAML::Node Write(const T& value) {
+YAML::Node Write(const T& value, bool readable = false) {
   if constexpr (HasFields<T>) {
     YAML::Node node(YAML::NodeType::Map);
     const_cast<T&>(value).VisitFields(
-        [&](const char* key, auto& field, const char*) { node[key] = Write(field); });
+        [&](const char* key, auto& field, const char*) { node[key] = Write(field, readable); });
     return node;
   } else if constexpr (IsStdArray<T>::value || IsStdVector<T>::value) {
     YAML::Node node(YAML::NodeType::Sequence);
-    for (const auto& element : value) node.push_back(Write(element));
+    for (const auto& element : value) node.push_back(Write(element, readable));
     node.SetStyle(YAML::EmitterStyle::Flow);
     return node;
+  } else if constexpr (std::is_floating_point_v<T>) {
+    if (!readable) return YAML::Node(value);
+    std::ostringstream text;
+    text << std::setprecision(15) << value;
+    return YAML::Node(text.str());
   } else {
     return YAML::Node(value);
   }
@@ -155,8 +164,7 @@ std::string OptionsToDocumentedYaml(const Options& options, int indent = 0) {
       out += pad + key + ":\n" + OptionsToDocumentedYaml(field, indent + 2);
     } else {
       YAML::Emitter emitter;
-      emitter.SetDoublePrecision(15);  // 0.3, not 0.29999999999999999, for people
-      emitter << options_detail::Write(field);
+      emitter << options_detail::Write(field, /*readable=*/true);
       out += pad + key + ": " + emitter.c_str() + "\n";
     }
   });
