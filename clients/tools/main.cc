@@ -3,6 +3,7 @@
 #include <CLI/CLI.hpp>
 #include <iostream>
 
+#include "clients/tools/calibrate/calibrate_command.h"
 #include "clients/tools/config_command.h"
 #include "clients/tools/demo_command.h"
 #include "clients/tools/estimate/estimate_command.h"
@@ -16,6 +17,7 @@ int main(int argc, char** argv) {
   shapesense::AddOfflineCommand(app);
   shapesense::AddDemoCommand(app);
   shapesense::AddConfigCommand(app);
+  shapesense::AddCalibrateCommand(app);
   shapesense::AddEstimateCommand(app);
   shapesense::AddMonitorCommand(app);
   try {
