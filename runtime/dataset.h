@@ -16,8 +16,8 @@ namespace shapesense {
 struct Dataset {
   std::filesystem::path root;
   Rig rig;
-  std::vector<cv::Mat> backgrounds;   // in rig order
-  std::vector<std::string> frames;    // frame folder names, in order
+  std::vector<cv::Mat> backgrounds;  // in rig order
+  std::vector<std::string> frames;   // frame folder names, in order
 };
 
 // Opens and checks the whole layout before any frame is read; a malformed

@@ -31,9 +31,9 @@ void CheckBackgrounds(const Rig& rig, const std::vector<cv::Mat>& backgrounds) {
 }  // namespace
 
 std::string PipelineOptions::Validate() const {
-  for (const auto& [section, error] : {std::pair{"silhouette.", silhouette.Validate()},
-                                       std::pair{"carving.", carving.Validate()},
-                                       std::pair{"shape.", shape.Validate()}}) {
+  for (const auto& [section, error] :
+       {std::pair{"silhouette.", silhouette.Validate()}, std::pair{"carving.", carving.Validate()},
+        std::pair{"shape.", shape.Validate()}}) {
     if (!error.empty()) return section + error;
   }
   return {};

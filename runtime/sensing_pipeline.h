@@ -26,7 +26,8 @@ struct PipelineOptions {
     visit("silhouette", silhouette, "silhouette extraction");
     visit("carving", carving, "voxel carving");
     visit("shape", shape, "centreline and markers");
-    visit("full_scan", full_scan, "carve by the full lookup-table scan (baseline) instead of the hierarchy");
+    visit("full_scan", full_scan,
+          "carve by the full lookup-table scan (baseline) instead of the hierarchy");
   }
   std::string Validate() const;
 };
@@ -51,8 +52,8 @@ struct FrameResult {
 class SensingPipeline {
  public:
   // Throws InputError on options or backgrounds that do not fit the rig.
-  SensingPipeline(const Rig& rig, const PipelineOptions& options,
-                  std::vector<cv::Mat> backgrounds, const ProgressCallback& table_progress = {});
+  SensingPipeline(const Rig& rig, const PipelineOptions& options, std::vector<cv::Mat> backgrounds,
+                  const ProgressCallback& table_progress = {});
 
   // `images` in the order of rig.cameras, 8-bit BGR. A frame that cannot be
   // measured comes back with shape.valid false and the reason in shape.error.

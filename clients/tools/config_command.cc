@@ -15,7 +15,8 @@ std::string DocumentedDefaults(const std::string& component) {
            OptionsToDocumentedYaml(PipelineOptions{});
   }
   if (component == "render") {
-    return "# Options of the virtual rig's renderer. Every key is optional; these are the defaults.\n" +
+    return "# Options of the virtual rig's renderer. Every key is optional; these are the "
+           "defaults.\n" +
            OptionsToDocumentedYaml(RenderOptions{});
   }
   return {};
@@ -23,11 +24,13 @@ std::string DocumentedDefaults(const std::string& component) {
 
 void AddConfigCommand(CLI::App& app) {
   auto component = std::make_shared<std::string>();
-  CLI::App* command = app.add_subcommand("config", "Print a component's options with their documentation and defaults");
+  CLI::App* command = app.add_subcommand(
+      "config", "Print a component's options with their documentation and defaults");
   command->add_option("component", *component, "pipeline | render")->required();
   command->callback([component] {
     const std::string text = DocumentedDefaults(*component);
-    if (text.empty()) throw CLI::ValidationError("component", "unknown: " + *component + " (pipeline | render)");
+    if (text.empty())
+      throw CLI::ValidationError("component", "unknown: " + *component + " (pipeline | render)");
     std::cout << text;
   });
 }

@@ -51,9 +51,11 @@ nlohmann::json TruthToJson(const std::string& frame, const GroundTruth& truth) {
     for (const Vec3& p : list) out.push_back({p.x(), p.y(), p.z()});
     return out;
   };
-  return {{"frame", frame},           {"centerline", points(truth.centerline)},
+  return {{"frame", frame},
+          {"centerline", points(truth.centerline)},
           {"tip", {truth.tip.x(), truth.tip.y(), truth.tip.z()}},
-          {"markers", points(truth.markers)}, {"arc_length", truth.length}};
+          {"markers", points(truth.markers)},
+          {"arc_length", truth.length}};
 }
 
 // Renders the sequence into out/dataset; returns the truth per frame.
@@ -66,7 +68,8 @@ std::map<std::string, GroundTruth> RenderDataset(const DemoArgs& args, const Rig
   ProgressBar bar("rendering", args.progress);
   for (int i = 0; i < args.frames; ++i) {
     const TubeScene scene = DemoScene(rig, i, args.frames);
-    const std::vector<RenderedView> views = renderer.Render(scene, render, args.seed + static_cast<uint32_t>(i));
+    const std::vector<RenderedView> views =
+        renderer.Render(scene, render, args.seed + static_cast<uint32_t>(i));
     std::vector<cv::Mat> images;
     for (const RenderedView& view : views) images.push_back(view.image);
     if (i == 0) {
@@ -157,22 +160,26 @@ DemoReport RunDemo(const DemoArgs& args, std::ostream& log) {
       PrintFrameRow(log, frame, result, &errors.back());
     }
     if (!images.empty()) {
-      WritePng(args.out / "overlays" / (frame + ".png"), MakeFrameOverlay(rig, images, result, &truth.centerline));
+      WritePng(args.out / "overlays" / (frame + ".png"),
+               MakeFrameOverlay(rig, images, result, &truth.centerline));
     }
   };
   const OfflineSummary offline_summary = RunOffline(offline, log, observe);
-  DemoReport report{Summarize(errors, failed), offline_summary.mean_times, offline_summary.table_build_s};
+  DemoReport report{Summarize(errors, failed), offline_summary.mean_times,
+                    offline_summary.table_build_s};
   PrintSummary(log, report);
   WriteFileAtomically(args.out / "report.json", SummaryToJson(report).dump(2) + "\n");
-  log << "wrote " << (args.out / "shapes.jsonl").string() << ", " << (args.out / "overlays").string()
-      << "/*.png, " << (args.out / "report.json").string() << '\n';
+  log << "wrote " << (args.out / "shapes.jsonl").string() << ", "
+      << (args.out / "overlays").string() << "/*.png, " << (args.out / "report.json").string()
+      << '\n';
   return report;
 }
 
 void AddDemoCommand(CLI::App& app) {
   auto args = std::make_shared<DemoArgs>();
   CLI::App* command = app.add_subcommand(
-      "demo", "Render a synthetic sequence on a virtual rig, measure it, and score it against the truth");
+      "demo",
+      "Render a synthetic sequence on a virtual rig, measure it, and score it against the truth");
   command->add_option("--out", args->out, "output folder")->capture_default_str();
   command->add_option("--frames", args->frames, "frames to render")->capture_default_str();
   command->add_option("--seed", args->seed, "seed of the rig and the noise")->capture_default_str();

@@ -41,7 +41,8 @@ std::ofstream OpenOutput(const fs::path& path) {
 }
 
 // Builds the carving lookup table with a progress bar.
-SensingPipeline MakePipeline(const Dataset& dataset, const PipelineOptions& options, bool progress) {
+SensingPipeline MakePipeline(const Dataset& dataset, const PipelineOptions& options,
+                             bool progress) {
   ProgressBar bar("lookup table", progress);
   return SensingPipeline(dataset.rig, options, dataset.backgrounds,
                          [&bar](double fraction) { bar.Update(fraction); });
@@ -63,13 +64,15 @@ cv::Mat MakeFrameOverlay(const Rig& rig, const std::vector<cv::Mat>& images,
                                       result.shape, truth));
   }
   const cv::Mat cameras = TileImages(views, 3);
-  const cv::Mat orthogonal = DrawOrthogonalViews(result.cloud, result.shape, truth, cameras.cols / 3);
+  const cv::Mat orthogonal =
+      DrawOrthogonalViews(result.cloud, result.shape, truth, cameras.cols / 3);
   cv::Mat picture;
   cv::vconcat(cameras, orthogonal, picture);
   return picture;
 }
 
-OfflineSummary RunOffline(const OfflineArgs& args, std::ostream& log, const FrameObserver& observer) {
+OfflineSummary RunOffline(const OfflineArgs& args, std::ostream& log,
+                          const FrameObserver& observer) {
   const PipelineOptions options = LoadPipelineOptions(args);
   const Dataset dataset = OpenDataset(args.dataset);
   log << "dataset " << args.dataset.string() << ": " << dataset.rig.cameras.size() << " cameras, "
@@ -106,11 +109,13 @@ OfflineSummary RunOffline(const OfflineArgs& args, std::ostream& log, const Fram
       log << "frame " << frame << ": not measured: " << result.shape.error << '\n';
     }
     if (!args.overlays.empty()) {
-      WritePng(args.overlays / (frame + ".png"), MakeFrameOverlay(dataset.rig, images, result, nullptr));
+      WritePng(args.overlays / (frame + ".png"),
+               MakeFrameOverlay(dataset.rig, images, result, nullptr));
     }
     if (observer) observer(frame, images, result);
-    bar.Update(static_cast<double>(summary.frames) / static_cast<double>(dataset.frames.size()),
-               "frame " + std::to_string(summary.frames) + "/" + std::to_string(dataset.frames.size()));
+    bar.Update(
+        static_cast<double>(summary.frames) / static_cast<double>(dataset.frames.size()),
+        "frame " + std::to_string(summary.frames) + "/" + std::to_string(dataset.frames.size()));
   }
   bar.Finish();
   if (summary.measured > 0) {
@@ -129,16 +134,19 @@ void AddOfflineCommand(CLI::App& app) {
   command->add_option("--dataset", args->dataset, "dataset folder (rig.yaml, background/, frames/)")
       ->required();
   command->add_option("--out", args->out, "output, one JSON object per frame (.jsonl)")->required();
-  CLI::Option* voxel = command->add_option("--voxel-size", *voxel_size, "voxel edge, mm (default 1)");
+  CLI::Option* voxel =
+      command->add_option("--voxel-size", *voxel_size, "voxel edge, mm (default 1)");
   command->add_option("--config", args->config, "pipeline options YAML (config/pipeline.yaml)");
-  command->add_option("--overlays", args->overlays, "write an overlay PNG per frame into this folder");
+  command->add_option("--overlays", args->overlays,
+                      "write an overlay PNG per frame into this folder");
   command->callback([args, voxel_size, voxel] {
     if (voxel->count() > 0) args->voxel_size = *voxel_size;
     const OfflineSummary summary = RunOffline(*args, std::cerr);
     std::cerr << std::fixed << std::setprecision(3) << "measured " << summary.measured << " of "
-              << summary.frames << " frames; mean ms: silhouette " << summary.mean_times.silhouette_ms
-              << ", carving " << summary.mean_times.carving_ms << ", shape "
-              << summary.mean_times.shape_ms << "; wrote " << args->out.string() << '\n';
+              << summary.frames << " frames; mean ms: silhouette "
+              << summary.mean_times.silhouette_ms << ", carving " << summary.mean_times.carving_ms
+              << ", shape " << summary.mean_times.shape_ms << "; wrote " << args->out.string()
+              << '\n';
   });
 }
 

@@ -14,11 +14,11 @@ namespace shapesense {
 
 struct OfflineArgs {
   std::filesystem::path dataset;
-  std::filesystem::path out;          // JSON lines, one per frame
-  std::optional<double> voxel_size;   // mm; overrides the config
-  std::filesystem::path config;       // pipeline YAML (config/pipeline.yaml); empty: defaults
-  std::filesystem::path overlays;     // folder for overlay PNGs; empty: none
-  bool progress = true;               // progress bar on a terminal
+  std::filesystem::path out;         // JSON lines, one per frame
+  std::optional<double> voxel_size;  // mm; overrides the config
+  std::filesystem::path config;      // pipeline YAML (config/pipeline.yaml); empty: defaults
+  std::filesystem::path overlays;    // folder for overlay PNGs; empty: none
+  bool progress = true;              // progress bar on a terminal
 };
 
 struct OfflineSummary {
@@ -30,9 +30,8 @@ struct OfflineSummary {
 
 // Called after each frame with its images (empty when they could not be read)
 // and result; lets the demo score frames against the truth.
-using FrameObserver = std::function<void(const std::string& frame,
-                                         const std::vector<cv::Mat>& images,
-                                         const FrameResult& result)>;
+using FrameObserver = std::function<void(
+    const std::string& frame, const std::vector<cv::Mat>& images, const FrameResult& result)>;
 
 // Runs the sensing chain over an image-folder dataset and writes one JSON line
 // per frame. Throws InputError (before writing anything) on a malformed

@@ -90,7 +90,8 @@ Camera ReadCamera(const NodeReader& reader, bool with_pose) {
 cv::FileStorage OpenText(const std::string& text, const std::string& source) {
   cv::FileStorage storage;
   try {
-    storage.open(text, cv::FileStorage::READ | cv::FileStorage::MEMORY | cv::FileStorage::FORMAT_YAML);
+    storage.open(text,
+                 cv::FileStorage::READ | cv::FileStorage::MEMORY | cv::FileStorage::FORMAT_YAML);
   } catch (const cv::Exception& e) {
     throw InputError(source + ": not valid OpenCV FileStorage YAML (" + e.err + ")");
   }
@@ -142,7 +143,8 @@ Rig ParseRigYaml(const std::string& text, const std::string& source) {
 
 std::string FormatRigYaml(const Rig& rig) {
   cv::FileStorage out(".yaml", cv::FileStorage::WRITE | cv::FileStorage::MEMORY);
-  out << "cameras" << "[";
+  out << "cameras"
+      << "[";
   for (const Camera& camera : rig.cameras) {
     out << "{";
     WriteCamera(out, camera, /*with_pose=*/true);

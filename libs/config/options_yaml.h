@@ -19,8 +19,8 @@
 
 #include <array>
 #include <iomanip>
-#include <sstream>
 #include <set>
+#include <sstream>
 #include <string>
 #include <type_traits>
 #include <vector>
@@ -31,7 +31,9 @@ namespace shapesense {
 namespace options_detail {
 
 template <class T>
-concept HasFields = requires(T& t) { t.VisitFields([](const char*, auto&, const char*) {}); };
+concept HasFields = requires(T& t) {
+  t.VisitFields([](const char*, auto&, const char*) {});
+};
 
 template <class T>
 struct IsStdArray : std::false_type {};
@@ -45,13 +47,21 @@ struct IsStdVector<std::vector<T, A>> : std::true_type {};
 
 template <class T>
 std::string ExpectedName() {
-  if constexpr (std::is_same_v<T, bool>) return "true or false";
-  else if constexpr (std::is_integral_v<T>) return "an integer";
-  else if constexpr (std::is_floating_point_v<T>) return "a number";
-  else if constexpr (std::is_same_v<T, std::string>) return "a string";
-  else if constexpr (IsStdArray<T>::value) return "a sequence of " + std::to_string(std::tuple_size_v<T>) + " " + ExpectedName<typename T::value_type>() + "s";
-  else if constexpr (IsStdVector<T>::value) return "a sequence of " + ExpectedName<typename T::value_type>() + "s";
-  else return "a map";
+  if constexpr (std::is_same_v<T, bool>)
+    return "true or false";
+  else if constexpr (std::is_integral_v<T>)
+    return "an integer";
+  else if constexpr (std::is_floating_point_v<T>)
+    return "a number";
+  else if constexpr (std::is_same_v<T, std::string>)
+    return "a string";
+  else if constexpr (IsStdArray<T>::value)
+    return "a sequence of " + std::to_string(std::tuple_size_v<T>) + " " +
+           ExpectedName<typename T::value_type>() + "s";
+  else if constexpr (IsStdVector<T>::value)
+    return "a sequence of " + ExpectedName<typename T::value_type>() + "s";
+  else
+    return "a map";
 }
 
 template <class T>
@@ -60,7 +70,9 @@ void Read(const YAML::Node& node, T& value, const std::string& source, const std
 template <class T>
 void ReadFields(const YAML::Node& node, T& options, const std::string& source,
                 const std::string& prefix) {
-  if (!node.IsMap()) throw InputError(DescribeInputError(source, prefix.empty() ? "(top level)" : prefix, "expected a map"));
+  if (!node.IsMap())
+    throw InputError(
+        DescribeInputError(source, prefix.empty() ? "(top level)" : prefix, "expected a map"));
   std::set<std::string> known;
   options.VisitFields([&](const char* key, auto& field, const char*) {
     known.insert(key);

@@ -12,7 +12,8 @@ namespace {
 double MaxDistanceToPolyline(const Polyline& points, const Polyline& line) {
   const std::vector<double> arc = CumulativeArcLength(line);
   double worst = 0.0;
-  for (const Vec3& p : points) worst = std::max(worst, ClosestPointOnPolyline(line, arc, p).distance);
+  for (const Vec3& p : points)
+    worst = std::max(worst, ClosestPointOnPolyline(line, arc, p).distance);
   return worst;
 }
 
@@ -23,7 +24,8 @@ void CompareMarkers(const ShapeEstimate& estimate, const GroundTruth& truth, Sha
   double sum_sq = 0.0;
   for (const Vec3& expected : truth.markers) {
     double nearest = std::numeric_limits<double>::infinity();
-    for (const Vec3& found : estimate.markers) nearest = std::min(nearest, (found - expected).norm());
+    for (const Vec3& found : estimate.markers)
+      nearest = std::min(nearest, (found - expected).norm());
     sum_sq += nearest * nearest;
     error->marker_max = std::max(error->marker_max, nearest);
   }

@@ -9,13 +9,13 @@ namespace shapesense {
 
 // How far a measured shape is from the ground truth, mm.
 struct ShapeError {
-  double centerline_rms = 0.0;   // each measured point to the true centreline
+  double centerline_rms = 0.0;  // each measured point to the true centreline
   double centerline_max = 0.0;
-  double coverage_rms = 0.0;     // each true point to the measured centreline (a short
-                                 // or truncated estimate cannot look good)
+  double coverage_rms = 0.0;  // each true point to the measured centreline (a short
+                              // or truncated estimate cannot look good)
   double tip = 0.0;
-  double length = 0.0;           // |measured − true length|
-  double marker_rms = 0.0;       // each true marker to the nearest measured one
+  double length = 0.0;      // |measured − true length|
+  double marker_rms = 0.0;  // each true marker to the nearest measured one
   double marker_max = 0.0;
   int markers_expected = 0;
   int markers_found = 0;

@@ -52,9 +52,9 @@ ClosestPoint ClosestPointOnPolyline(const Polyline& points, const std::vector<do
   for (size_t i = 1; i < points.size(); ++i) {
     const Vec3 segment = points[i] - points[i - 1];
     const double length_sq = segment.squaredNorm();
-    const double t =
-        length_sq > 0.0 ? std::clamp((query - points[i - 1]).dot(segment) / length_sq, 0.0, 1.0)
-                        : 0.0;
+    const double t = length_sq > 0.0
+                         ? std::clamp((query - points[i - 1]).dot(segment) / length_sq, 0.0, 1.0)
+                         : 0.0;
     const Vec3 candidate = points[i - 1] + t * segment;
     const double distance = (candidate - query).norm();
     if (distance < best.distance) {

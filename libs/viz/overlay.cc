@@ -28,16 +28,16 @@ void DrawProjected(cv::Mat& canvas, const Camera& camera, const Polyline& points
       flush();
       continue;
     }
-    run.emplace_back(static_cast<int>(std::lround(pixel->x())), static_cast<int>(std::lround(pixel->y())));
+    run.emplace_back(static_cast<int>(std::lround(pixel->x())),
+                     static_cast<int>(std::lround(pixel->y())));
   }
   flush();
 }
 
 }  // namespace
 
-cv::Mat DrawCameraOverlay(const cv::Mat& image, const Silhouette& silhouette,
-                          const Camera& camera, const ShapeEstimate& shape,
-                          const Polyline* truth) {
+cv::Mat DrawCameraOverlay(const cv::Mat& image, const Silhouette& silhouette, const Camera& camera,
+                          const ShapeEstimate& shape, const Polyline* truth) {
   cv::Mat canvas = image.clone();
   if (!silhouette.labels.empty()) canvas.setTo(kMagenta, silhouette.labels == kLabelMarker);
   if (!silhouette.mask.empty()) {
@@ -96,7 +96,8 @@ cv::Mat DrawView(const VoxelCloud& cloud, const ShapeEstimate& shape, const Poly
   const ViewWindow window = FitWindow(cloud, shape, truth, view);
   const double scale = size_px / window.extent;
   auto to_pixel = [&](const Vec3& p) {
-    return cv::Point2d((p[view.a] - window.low_a) * scale, size_px - (p[view.b] - window.low_b) * scale);
+    return cv::Point2d((p[view.a] - window.low_a) * scale,
+                       size_px - (p[view.b] - window.low_b) * scale);
   };
   cv::Mat canvas(size_px, size_px, CV_8UC3, cv::Scalar(30, 30, 30));
   const int dot = std::max(1, static_cast<int>(grid.voxel_size * scale));
@@ -114,11 +115,13 @@ cv::Mat DrawView(const VoxelCloud& cloud, const ShapeEstimate& shape, const Poly
   if (truth != nullptr) draw_line(*truth, kGreen, 1);
   if (shape.valid) draw_line(shape.centerline, kYellow, 1);
   const std::array<const char*, 3> axis = {"x", "y", "z"};
-  cv::putText(canvas, std::string(view.name) + "  (" + axis[view.a] + " right, " + axis[view.b] + " up)",
+  cv::putText(canvas,
+              std::string(view.name) + "  (" + axis[view.a] + " right, " + axis[view.b] + " up)",
               cv::Point(6, 18), cv::FONT_HERSHEY_SIMPLEX, 0.45, kWhite, 1, cv::LINE_AA);
   const int bar = static_cast<int>(10.0 * scale);
   cv::line(canvas, cv::Point(10, size_px - 12), cv::Point(10 + bar, size_px - 12), kWhite, 2);
-  cv::putText(canvas, "10 mm", cv::Point(14 + bar, size_px - 8), cv::FONT_HERSHEY_SIMPLEX, 0.4, kWhite, 1, cv::LINE_AA);
+  cv::putText(canvas, "10 mm", cv::Point(14 + bar, size_px - 8), cv::FONT_HERSHEY_SIMPLEX, 0.4,
+              kWhite, 1, cv::LINE_AA);
   return canvas;
 }
 
@@ -146,7 +149,8 @@ cv::Mat TileImages(const std::vector<cv::Mat>& images, int columns) {
   cv::Mat canvas(rows * tile_h, cols * tile_w, images.front().type(), cv::Scalar::all(0));
   for (int i = 0; i < count; ++i) {
     const cv::Mat& image = images[static_cast<size_t>(i)];
-    image.copyTo(canvas(cv::Rect((i % cols) * tile_w, (i / cols) * tile_h, image.cols, image.rows)));
+    image.copyTo(
+        canvas(cv::Rect((i % cols) * tile_w, (i / cols) * tile_h, image.cols, image.rows)));
   }
   return canvas;
 }

@@ -13,9 +13,8 @@ namespace shapesense {
 // Pictures for people: what each camera saw with the silhouette outline (cyan),
 // tape pixels (magenta), the measured centreline (yellow), markers (red
 // circles) and, when given, the true centreline (thin green).
-cv::Mat DrawCameraOverlay(const cv::Mat& image, const Silhouette& silhouette,
-                          const Camera& camera, const ShapeEstimate& shape,
-                          const Polyline* truth = nullptr);
+cv::Mat DrawCameraOverlay(const cv::Mat& image, const Silhouette& silhouette, const Camera& camera,
+                          const ShapeEstimate& shape, const Polyline* truth = nullptr);
 
 // Three orthogonal projections (x-y, x-z, y-z) of the voxels (grey, tape in
 // red) with the measured centreline (yellow) and the truth (green), side by

@@ -12,7 +12,9 @@ inline std::string Image(const std::string& camera) { return "SHAPESENSE_IMAGE_"
 // Every camera's images: the LCM regular expression the carving service subscribes to.
 inline constexpr const char* kImagePattern = "SHAPESENSE_IMAGE_.*";
 // Silhouettes for monitoring, at a low rate: image_t (mono, 255 inside).
-inline std::string Silhouette(const std::string& camera) { return "SHAPESENSE_SILHOUETTE_" + camera; }
+inline std::string Silhouette(const std::string& camera) {
+  return "SHAPESENSE_SILHOUETTE_" + camera;
+}
 // The visual hull of each frame-set: voxel_cloud_t.
 inline constexpr const char* kVoxels = "SHAPESENSE_VOXELS";
 // The measured shape: shape_t.

@@ -7,7 +7,8 @@ namespace shapesense {
 
 LcmBus::LcmBus(const std::string& url) : lcm_(url) {
   if (!lcm_.good()) {
-    throw std::runtime_error("LCM could not start on '" + (url.empty() ? std::string("default") : url) +
+    throw std::runtime_error("LCM could not start on '" +
+                             (url.empty() ? std::string("default") : url) +
                              "' (is there a multicast route? see deploy/lcm-network.md)");
   }
 }

@@ -30,7 +30,8 @@ Scenes RenderScenes(const Rig& rig, int count) {
   Scenes scenes;
   for (int i = 0; i < count; ++i) {
     const TubeScene scene = RandomScene(rig, 500 + static_cast<uint32_t>(i), 2.6, 3);
-    const std::vector<RenderedView> views = RenderScene(rig, scene, RenderOptions{}, static_cast<uint32_t>(i));
+    const std::vector<RenderedView> views =
+        RenderScene(rig, scene, RenderOptions{}, static_cast<uint32_t>(i));
     std::vector<cv::Mat> images;
     for (const RenderedView& view : views) images.push_back(view.image);
     scenes.images.push_back(images);
@@ -85,7 +86,8 @@ StageRates MeasureStages(const Rig& rig, const Scenes& scenes, const SensingPipe
   std::vector<Silhouette> silhouettes(rig.cameras.size());
   rates.silhouettes = Rate(1.0, 20, [&](int run) {
     const auto& images = scenes.images[static_cast<size_t>(run) % n];
-    for (size_t c = 0; c < images.size(); ++c) extractor.Extract(images[c], scenes.backgrounds[c], &silhouettes[c]);
+    for (size_t c = 0; c < images.size(); ++c)
+      extractor.Extract(images[c], scenes.backgrounds[c], &silhouettes[c]);
   });
   VoxelCloud cloud;
   if (with_full_scan) {
@@ -110,14 +112,20 @@ StageRates MeasureStages(const Rig& rig, const Scenes& scenes, const SensingPipe
 }
 
 void PrintRates(const StageRates& r) {
-  std::printf("  silhouettes (3 x 640x480) %9.1f frame-sets/s  (%.3f ms)\n", r.silhouettes, 1e3 / r.silhouettes);
+  std::printf("  silhouettes (3 x 640x480) %9.1f frame-sets/s  (%.3f ms)\n", r.silhouettes,
+              1e3 / r.silhouettes);
   if (r.full_scan > 0) {
-    std::printf("  carving, full table scan  %9.1f frame-sets/s  (%.3f ms)\n", r.full_scan, 1e3 / r.full_scan);
+    std::printf("  carving, full table scan  %9.1f frame-sets/s  (%.3f ms)\n", r.full_scan,
+                1e3 / r.full_scan);
   }
-  std::printf("  carving, hierarchical     %9.1f frame-sets/s  (%.3f ms)\n", r.hierarchical, 1e3 / r.hierarchical);
-  if (r.full_scan > 0) std::printf("  hierarchical / full scan  %9.1f x\n", r.hierarchical / r.full_scan);
-  std::printf("  shape estimation          %9.1f frame-sets/s  (%.3f ms)\n", r.shape, 1e3 / r.shape);
-  std::printf("  whole chain               %9.1f frame-sets/s  (%.3f ms)\n", r.chain, 1e3 / r.chain);
+  std::printf("  carving, hierarchical     %9.1f frame-sets/s  (%.3f ms)\n", r.hierarchical,
+              1e3 / r.hierarchical);
+  if (r.full_scan > 0)
+    std::printf("  hierarchical / full scan  %9.1f x\n", r.hierarchical / r.full_scan);
+  std::printf("  shape estimation          %9.1f frame-sets/s  (%.3f ms)\n", r.shape,
+              1e3 / r.shape);
+  std::printf("  whole chain               %9.1f frame-sets/s  (%.3f ms)\n", r.chain,
+              1e3 / r.chain);
 }
 
 void RunAt(const Rig& rig, const Scenes& scenes, double voxel_size, bool with_full_scan) {
@@ -127,9 +135,10 @@ void RunAt(const Rig& rig, const Scenes& scenes, double voxel_size, bool with_fu
   const SensingPipeline pipeline(rig, options, scenes.backgrounds);
   const double build_s = std::chrono::duration<double>(Clock::now() - start).count();
   const VoxelGrid& grid = pipeline.carver().grid();
-  std::printf("\n%d x %d x %d voxels of %.2f mm, %zu cameras (lookup table built in %.1f s, %.0f MB)\n",
-              grid.dims[0], grid.dims[1], grid.dims[2], voxel_size, rig.cameras.size(), build_s,
-              static_cast<double>(pipeline.carver().MemoryBytes()) / 1e6);
+  std::printf(
+      "\n%d x %d x %d voxels of %.2f mm, %zu cameras (lookup table built in %.1f s, %.0f MB)\n",
+      grid.dims[0], grid.dims[1], grid.dims[2], voxel_size, rig.cameras.size(), build_s,
+      static_cast<double>(pipeline.carver().MemoryBytes()) / 1e6);
   PrintRates(MeasureStages(rig, scenes, pipeline, options, with_full_scan));
   std::printf("  peak resident memory so far: %.0f MB\n", PeakResidentMb());
 }
@@ -145,7 +154,9 @@ int main(int argc, char** argv) {
   rig_options.seed = 11;
   const Rig rig = MakeSyntheticRig(rig_options);
   const Scenes scenes = RenderScenes(rig, 8);
-  std::printf("shapesense_bench: one core, 8 rendered scenes (random arcs and S-curves, bends to 150 deg)\n");
+  std::printf(
+      "shapesense_bench: one core, 8 rendered scenes (random arcs and S-curves, bends to 150 "
+      "deg)\n");
   RunAt(rig, scenes, 1.0, /*with_full_scan=*/true);
   if (!skip_512) RunAt(rig, scenes, 0.5, /*with_full_scan=*/false);
   return 0;

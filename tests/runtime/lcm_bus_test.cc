@@ -22,10 +22,11 @@ void HandleUntil(LcmBus& bus, Done done) {
 TEST(LcmBusTest, DeliversTypedMessages) {
   LcmBus bus("memq://");
   std::vector<int64_t> seen;
-  bus.Subscribe<shape_t>(channels::kShape, [&](const shape_t& shape, const std::string& channel, int64_t) {
-    EXPECT_EQ(channel, channels::kShape);
-    seen.push_back(shape.trigger_seq);
-  });
+  bus.Subscribe<shape_t>(channels::kShape,
+                         [&](const shape_t& shape, const std::string& channel, int64_t) {
+                           EXPECT_EQ(channel, channels::kShape);
+                           seen.push_back(shape.trigger_seq);
+                         });
   for (int64_t i = 0; i < 3; ++i) {
     shape_t shape{};
     shape.trigger_seq = i;
@@ -39,19 +40,22 @@ TEST(LcmBusTest, DeliversTypedMessages) {
 TEST(LcmBusTest, MalformedMessagesAreCountedNotDelivered) {
   LcmBus bus("memq://");
   int delivered = 0;
-  bus.Subscribe<shape_t>(channels::kShape, [&](const shape_t&, const std::string&, int64_t) { ++delivered; });
+  bus.Subscribe<shape_t>(channels::kShape,
+                         [&](const shape_t&, const std::string&, int64_t) { ++delivered; });
   voxel_cloud_t wrong_type{};
   bus.Publish(channels::kShape, wrong_type);
   HandleUntil(bus, [&] { return bus.Rejected() == 1; });
   EXPECT_EQ(bus.Rejected(), 1);
   EXPECT_EQ(delivered, 0);
-  EXPECT_NE(bus.LastRejection().find("not a valid shape_t"), std::string::npos) << bus.LastRejection();
+  EXPECT_NE(bus.LastRejection().find("not a valid shape_t"), std::string::npos)
+      << bus.LastRejection();
 }
 
 TEST(LcmBusTest, ATruncatedMessageIsRejected) {
   LcmBus bus("memq://");
   int delivered = 0;
-  bus.Subscribe<shape_t>(channels::kShape, [&](const shape_t&, const std::string&, int64_t) { ++delivered; });
+  bus.Subscribe<shape_t>(channels::kShape,
+                         [&](const shape_t&, const std::string&, int64_t) { ++delivered; });
   // A message of the right type cut short: publish its first bytes raw
   // through a second subscription-free publisher on the same provider.
   shape_t shape{};
@@ -93,8 +97,9 @@ TEST(LcmBusTest, AThrowingHandlerIsContainedAndCounted) {
 TEST(ServiceStatusTest, PublishesAtOneHertzWithTheCounters) {
   LcmBus bus("memq://");
   std::vector<service_status_t> statuses;
-  bus.Subscribe<service_status_t>(channels::Status("carving"),
-                                  [&](const service_status_t& s, const std::string&, int64_t) { statuses.push_back(s); });
+  bus.Subscribe<service_status_t>(
+      channels::Status("carving"),
+      [&](const service_status_t& s, const std::string&, int64_t) { statuses.push_back(s); });
   ServiceStatus status("carving");
   status.Received(10);
   status.Dropped(2);

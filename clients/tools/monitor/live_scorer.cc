@@ -73,7 +73,9 @@ void LiveScorer::AddShape(const shape_t& shape, int64_t receive_utime) {
   matched_truth_times_.push_back(truth->trigger_utime);
 }
 
-void LiveScorer::AddStatus(const service_status_t& status) { last_status_[status.service] = status; }
+void LiveScorer::AddStatus(const service_status_t& status) {
+  last_status_[status.service] = status;
+}
 
 LiveScorer::Report LiveScorer::Finish(int64_t end_utime, int64_t grace_us) const {
   Report report;

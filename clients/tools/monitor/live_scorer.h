@@ -32,17 +32,17 @@ class LiveScorer {
   };
 
   struct Report {
-    int truths = 0;             // frame-sets the rig rendered
-    int shapes = 0;             // shapes received
+    int truths = 0;  // frame-sets the rig rendered
+    int shapes = 0;  // shapes received
     int valid_shapes = 0;
-    int matched = 0;            // valid shapes paired with a truth
-    int unmatched_truths = 0;   // rendered, never measured (excluding the run's last 0.5 s)
+    int matched = 0;                   // valid shapes paired with a truth
+    int unmatched_truths = 0;          // rendered, never measured (excluding the run's last 0.5 s)
     double centerline_rms_mean = 0.0;  // mm, over matched frames
     double centerline_rms_max = 0.0;
     double tip_error_mean = 0.0;
     double tip_error_max = 0.0;
-    std::map<std::string, Percentiles> stage_ms;  // per stage, from the shapes' stage times
-    Percentiles trigger_to_shape_ms;              // trigger → shape received
+    std::map<std::string, Percentiles> stage_ms;          // per stage, from the shapes' stage times
+    Percentiles trigger_to_shape_ms;                      // trigger → shape received
     std::map<std::string, service_status_t> last_status;  // per service
   };
 

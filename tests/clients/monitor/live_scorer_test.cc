@@ -9,7 +9,8 @@ shape_t StraightShape(int64_t trigger_utime, double offset_x, bool valid = true)
   shape_t shape{};
   shape.trigger_utime = trigger_utime;
   shape.valid = valid;
-  for (int i = 0; i <= 100; ++i) shape.centerline.push_back({offset_x, 0.0, static_cast<double>(i)});
+  for (int i = 0; i <= 100; ++i)
+    shape.centerline.push_back({offset_x, 0.0, static_cast<double>(i)});
   shape.num_points = static_cast<int32_t>(shape.centerline.size());
   shape.tip[0] = offset_x;
   shape.tip[2] = 100.0;
@@ -41,7 +42,8 @@ TEST(LiveScorerTest, PairsShapesWithTheTruthOfTheSameTrigger) {
 TEST(LiveScorerTest, CountsLostFrameSetsButNotThoseStillInFlight) {
   LiveScorer scorer(5000);
   for (int i = 0; i < 10; ++i) scorer.AddTruth(StraightShape(i * 100'000, 0.0));
-  for (int i : {0, 1, 2, 5, 6}) scorer.AddShape(StraightShape(i * 100'000, 0.1), i * 100'000 + 1000);
+  for (int i : {0, 1, 2, 5, 6})
+    scorer.AddShape(StraightShape(i * 100'000, 0.1), i * 100'000 + 1000);
   scorer.AddShape(StraightShape(3 * 100'000, 0.1, /*valid=*/false), 0);
   // The run ended at 1.0 s: truths at 0.6 s and later are within the grace period.
   const LiveScorer::Report report = scorer.Finish(1'000'000, 450'000);

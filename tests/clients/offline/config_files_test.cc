@@ -13,7 +13,8 @@ namespace shapesense {
 namespace {
 
 TEST(ConfigFilesTest, PipelineYamlIsTheDocumentedDefaults) {
-  const std::filesystem::path path = std::filesystem::path(SHAPESENSE_SOURCE_DIR) / "config" / "pipeline.yaml";
+  const std::filesystem::path path =
+      std::filesystem::path(SHAPESENSE_SOURCE_DIR) / "config" / "pipeline.yaml";
   EXPECT_EQ(ReadTextFile(path), DocumentedDefaults("pipeline"))
       << "regenerate: shapesense config pipeline > config/pipeline.yaml";
   const PipelineOptions loaded = LoadOptionsFile<PipelineOptions>(path);
@@ -24,7 +25,8 @@ TEST(ConfigFilesTest, PipelineYamlIsTheDocumentedDefaults) {
 }
 
 TEST(ConfigFilesTest, RenderDefaultsRoundTrip) {
-  const RenderOptions loaded = OptionsFromYamlText<RenderOptions>(DocumentedDefaults("render"), "render");
+  const RenderOptions loaded =
+      OptionsFromYamlText<RenderOptions>(DocumentedDefaults("render"), "render");
   YAML::Emitter a, b;
   a << OptionsToYaml(loaded);
   b << OptionsToYaml(RenderOptions{});

@@ -21,9 +21,10 @@ namespace fs = std::filesystem;
 struct TempDir {
   fs::path path;
   TempDir() {
-    path = fs::temp_directory_path() /
-           ("shapesense_offline_" + std::to_string(::testing::UnitTest::GetInstance()->random_seed()) +
-            "_" + ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    path =
+        fs::temp_directory_path() /
+        ("shapesense_offline_" + std::to_string(::testing::UnitTest::GetInstance()->random_seed()) +
+         "_" + ::testing::UnitTest::GetInstance()->current_test_info()->name());
     fs::remove_all(path);
     fs::create_directories(path);
   }
@@ -38,7 +39,8 @@ std::vector<GroundTruth> WriteDataset(const fs::path& root, int frames) {
   std::vector<GroundTruth> truths;
   for (int i = 0; i < frames; ++i) {
     const TubeScene scene = RandomScene(rig, 100 + static_cast<uint32_t>(i), 2.0, 2);
-    const std::vector<RenderedView> views = RenderScene(rig, scene, RenderOptions{}, static_cast<uint32_t>(i));
+    const std::vector<RenderedView> views =
+        RenderScene(rig, scene, RenderOptions{}, static_cast<uint32_t>(i));
     std::vector<cv::Mat> images, backgrounds;
     for (const RenderedView& view : views) {
       images.push_back(view.image);
@@ -60,7 +62,8 @@ std::vector<nlohmann::json> ReadLines(const fs::path& path) {
 
 Polyline ToPolyline(const nlohmann::json& points) {
   Polyline out;
-  for (const auto& p : points) out.emplace_back(p[0].get<double>(), p[1].get<double>(), p[2].get<double>());
+  for (const auto& p : points)
+    out.emplace_back(p[0].get<double>(), p[1].get<double>(), p[2].get<double>());
   return out;
 }
 
@@ -125,7 +128,8 @@ TEST(OfflineCommandTest, AnEmptySceneIsReportedAsNotMeasured) {
   // A frame that is just the background: nothing to measure.
   fs::create_directories(dir.path / "data" / "frames" / FrameName(1));
   for (const auto& entry : fs::directory_iterator(dir.path / "data" / "background")) {
-    fs::copy_file(entry.path(), dir.path / "data" / "frames" / FrameName(1) / entry.path().filename());
+    fs::copy_file(entry.path(),
+                  dir.path / "data" / "frames" / FrameName(1) / entry.path().filename());
   }
   std::ostringstream log;
   RunOffline(ArgsFor(dir.path), log);
@@ -182,7 +186,8 @@ TEST(OfflineCommandTest, BadVoxelSizeAndConfigAreRejected) {
     RunOffline(args, log);
     ADD_FAILURE();
   } catch (const InputError& e) {
-    EXPECT_NE(std::string(e.what()).find("pipeline.yaml: carving.voxel_sise: unknown key"), std::string::npos)
+    EXPECT_NE(std::string(e.what()).find("pipeline.yaml: carving.voxel_sise: unknown key"),
+              std::string::npos)
         << e.what();
   }
 }

@@ -25,7 +25,9 @@ TEST(CameraTest, ProjectionAgreesWithOpenCv) {
   cv::eigen2cv(translation, tvec);
   cv::Rodrigues(r, rvec);
   std::vector<cv::Point2d> expected;
-  cv::projectPoints(points, rvec, tvec, k, std::vector<double>(camera.distortion.begin(), camera.distortion.end()), expected);
+  cv::projectPoints(points, rvec, tvec, k,
+                    std::vector<double>(camera.distortion.begin(), camera.distortion.end()),
+                    expected);
   for (size_t i = 0; i < points.size(); ++i) {
     const auto pixel = camera.Project(Vec3(points[i].x, points[i].y, points[i].z));
     ASSERT_TRUE(pixel.has_value());

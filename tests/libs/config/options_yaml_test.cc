@@ -31,7 +31,8 @@ struct ExampleOptions {
     visit("inner", inner, "nested options");
   }
   std::string Validate() const {
-    if (!(voxel_size > 0)) return "voxel_size: expected a positive number, got " + std::to_string(voxel_size);
+    if (!(voxel_size > 0))
+      return "voxel_size: expected a positive number, got " + std::to_string(voxel_size);
     return inner.Validate();
   }
 };
