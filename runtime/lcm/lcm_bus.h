@@ -32,7 +32,9 @@ class LcmBus {
   void Subscribe(const std::string& channel,
                  std::function<void(const Message&, const std::string&, int64_t)> handler) {
     auto subscription = std::make_unique<Typed<Message>>(this, std::move(handler));
-    lcm_.subscribe(channel, &Typed<Message>::OnRaw, subscription.get());
+    // A plain function, not a member pointer: GCC 12's UBSan misreads LCM's
+    // member-pointer subscription path (a false "misaligned address").
+    lcm_.subscribeFunction(channel, &Typed<Message>::OnRawStatic, subscription.get());
     subscriptions_.push_back(std::move(subscription));
   }
 
@@ -53,6 +55,11 @@ class LcmBus {
   struct Typed : SubscriptionBase {
     Typed(LcmBus* bus, std::function<void(const Message&, const std::string&, int64_t)> handler)
         : bus_(bus), handler_(std::move(handler)) {}
+
+    static void OnRawStatic(const lcm::ReceiveBuffer* buffer, const std::string& channel,
+                            Typed* self) {
+      self->OnRaw(buffer, channel);
+    }
 
     void OnRaw(const lcm::ReceiveBuffer* buffer, const std::string& channel) {
       Message message;
