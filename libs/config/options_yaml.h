@@ -18,9 +18,8 @@
 #include <yaml-cpp/yaml.h>
 
 #include <array>
-#include <iomanip>
+#include <charconv>
 #include <set>
-#include <sstream>
 #include <string>
 #include <type_traits>
 #include <vector>
@@ -110,8 +109,8 @@ void Read(const YAML::Node& node, T& value, const std::string& source, const std
   }
 }
 
-// `readable`: doubles with 15 significant digits (0.3, not 0.29999999999999999),
-// for files people read; otherwise exact.
+// `readable`: doubles in their shortest exact form (0.3, not
+// 0.29999999999999999), for files people read; both read back exactly.
 template <class T>
 YAML::Node Write(const T& value, bool readable = false) {
   if constexpr (HasFields<T>) {
@@ -126,9 +125,10 @@ YAML::Node Write(const T& value, bool readable = false) {
     return node;
   } else if constexpr (std::is_floating_point_v<T>) {
     if (!readable) return YAML::Node(value);
-    std::ostringstream text;
-    text << std::setprecision(15) << value;
-    return YAML::Node(text.str());
+    // The shortest text that reads back to exactly the same double.
+    std::array<char, 32> text{};
+    const auto result = std::to_chars(text.data(), text.data() + text.size(), value);
+    return YAML::Node(std::string(text.data(), result.ptr));
   } else {
     return YAML::Node(value);
   }

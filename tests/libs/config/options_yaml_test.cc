@@ -94,3 +94,22 @@ TEST(OptionsYamlTest, BadValuesNameFileKeyAndExpectation) {
 
 }  // namespace
 }  // namespace shapesense
+
+namespace shapesense {
+namespace {
+
+TEST(OptionsYamlTest, DocumentedYamlKeepsEveryDoubleExactly) {
+  ExampleOptions options;
+  options.voxel_size = 0.1 + 0.2;  // 0.30000000000000004: not 0.3
+  options.weights = {1.0 / 3.0, 2568.0481234567891, 1e-17};
+  const auto parsed =
+      OptionsFromYamlText<ExampleOptions>(OptionsToDocumentedYaml(options), "doc.yaml");
+  EXPECT_EQ(parsed.voxel_size, options.voxel_size);
+  EXPECT_EQ(parsed.weights, options.weights);
+  ExampleOptions plain;
+  plain.voxel_size = 0.3;
+  EXPECT_NE(OptionsToDocumentedYaml(plain).find("voxel_size: 0.3\n"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace shapesense
