@@ -31,6 +31,7 @@ struct Frame {
   std::vector<cv::Mat> masks;                // continuous
   std::vector<cv::Mat> labels;               // continuous, or empty (no markers)
   std::vector<const uint8_t*> mask_pixels;   // masks[c].data
+  std::vector<cv::Rect> mask_bounds;         // Silhouette::bounds, empty when not known
   std::vector<const uint8_t*> label_pixels;  // labels[c].data, nullptr when empty
 };
 
@@ -57,6 +58,9 @@ Frame CheckedFrame(const std::vector<Silhouette>& silhouettes, const std::vector
   for (size_t c = 0; c < cameras.size(); ++c) {
     frame.masks.push_back(CheckedImage(silhouettes[c].mask, cameras[c], "mask"));
     frame.mask_pixels.push_back(frame.masks.back().data);
+    // The extractor already knows each mask's bounding box (area > 0); a
+    // hand-built silhouette leaves it empty and the sums scan for it.
+    frame.mask_bounds.push_back(silhouettes[c].area > 0 ? silhouettes[c].bounds : cv::Rect());
     const cv::Mat& labels = silhouettes[c].labels;
     frame.labels.push_back(labels.empty() ? labels : CheckedImage(labels, cameras[c], "labels"));
     frame.label_pixels.push_back(labels.empty() ? nullptr : frame.labels.back().data);
@@ -127,7 +131,9 @@ class HierarchicalSearch {
  public:
   HierarchicalSearch(const VoxelTable& table, const Frame& frame)
       : table_(table), frame_(frame), counts_(table.num_cameras()), order_(table.num_cameras()) {
-    for (const cv::Mat& mask : frame.masks) sums_.emplace_back(mask);
+    for (size_t c = 0; c < frame.masks.size(); ++c) {
+      sums_.emplace_back(frame.masks[c], frame.mask_bounds[c]);
+    }
   }
 
   std::vector<uint32_t> Run() {

@@ -71,8 +71,8 @@ void AddRowPrefix(const uint8_t* row, int width, const int32_t* above, int32_t* 
 
 }  // namespace
 
-SummedAreaTable::SummedAreaTable(const cv::Mat& mask)
-    : box_(NonzeroBoundingBox(mask)), stride_(box_.width + 1) {
+SummedAreaTable::SummedAreaTable(const cv::Mat& mask, const cv::Rect& known_box)
+    : box_(known_box.empty() ? NonzeroBoundingBox(mask) : known_box), stride_(box_.width + 1) {
   sums_ = std::make_unique_for_overwrite<int32_t[]>(static_cast<size_t>(box_.height + 1) *
                                                     static_cast<size_t>(stride_));
   std::fill(sums_.get(), sums_.get() + stride_, 0);

@@ -14,8 +14,10 @@ namespace shapesense::carving_detail {
 // of every frame's cost.
 class SummedAreaTable {
  public:
-  // `mask`: CV_8UC1, nonzero = inside.
-  explicit SummedAreaTable(const cv::Mat& mask);
+  // `mask`: CV_8UC1, nonzero = inside. `known_box`: the bounding box of its
+  // nonzero pixels when the caller has it (Silhouette::bounds); empty, it is
+  // found by scanning the mask.
+  explicit SummedAreaTable(const cv::Mat& mask, const cv::Rect& known_box = {});
 
   // Nonzero pixels of the mask inside `rect` (any rectangle, even one
   // reaching outside the image or empty).
