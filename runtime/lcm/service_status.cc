@@ -25,6 +25,11 @@ void ServiceStatus::Error(const std::string& what) {
   last_error_ = what;
 }
 
+void ServiceStatus::Note(const std::string& what) {
+  std::lock_guard lock(mutex_);
+  last_error_ = what;
+}
+
 service_status_t ServiceStatus::Snapshot(int64_t now_utime, int64_t bus_rejected) {
   std::lock_guard lock(mutex_);
   service_status_t status{};
