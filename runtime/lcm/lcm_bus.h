@@ -8,6 +8,8 @@
 #include <string>
 #include <vector>
 
+#include "runtime/lcm/wire_check.h"
+
 namespace shapesense {
 
 // LCM behind a small typed interface. Subscriptions decode the raw buffer
@@ -63,8 +65,10 @@ class LcmBus {
 
     void OnRaw(const lcm::ReceiveBuffer* buffer, const std::string& channel) {
       Message message;
-      if (message.decode(buffer->data, 0, static_cast<int>(buffer->data_size)) < 0) {
-        bus_->Reject(channel, "not a valid " + std::string(Message::getTypeName()));
+      // DecodeMessage checks the lengths before lcm-gen's decoder allocates by them.
+      const std::string why = DecodeMessage(buffer->data, buffer->data_size, &message);
+      if (!why.empty()) {
+        bus_->Reject(channel, why);
         return;
       }
       try {

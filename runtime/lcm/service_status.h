@@ -21,6 +21,9 @@ class ServiceStatus {
   void Dropped(int64_t n = 1) { dropped_ += n; }
   void Rejected(int64_t n = 1) { rejected_ += n; }
   void Error(const std::string& what);
+  // Records `what` as the last error without counting an error (e.g. why a
+  // message was rejected or a frame-set dropped, next to that counter).
+  void Note(const std::string& what);
   void SetQueueDepth(int depth) { queue_depth_ = depth; }
 
   // Publishes when at least a second has passed since the last status;

@@ -27,7 +27,7 @@ enum class TriggerMode {
 };
 
 struct CameraConfig {
-  std::string name;              // as in the rig file
+  std::string name;                // as in the rig file
   std::string backend = "aravis";  // aravis | v4l2 | replay | simulated
   // aravis: device id, serial number or IP address; v4l2: /dev/videoN;
   // replay: dataset folder or video file; simulated: (unused).
@@ -39,20 +39,21 @@ struct CameraConfig {
   int height = 480;
   double exposure_us = 5000.0;
   double gain_db = 0.0;
-  double frame_rate = 30.0;        // Hz: free run, replay rate
-  std::string trigger = "software";  // free_run | software | hardware
+  double frame_rate = 30.0;            // Hz: free run, replay rate
+  std::string trigger = "software";    // free_run | software | hardware
   std::string trigger_line = "Line1";  // hardware trigger source
-  int packet_size = 0;             // GigE packet size, bytes (0: negotiate)
-  int socket_buffer = 0;           // GigE socket buffer, bytes (0: Aravis default)
-  int buffer_count = 8;            // stream / mmap buffers
-  bool loop = true;                // replay: start again at the end
+  int packet_size = 0;                 // GigE packet size, bytes (0: negotiate)
+  int socket_buffer = 0;               // GigE socket buffer, bytes (0: Aravis default)
+  int buffer_count = 8;                // stream / mmap buffers
+  bool loop = true;                    // replay: start again at the end
 
   template <class Visitor>
   void VisitFields(Visitor&& visit) {
     visit("name", name, "camera name, as in the rig file");
     visit("backend", backend, "aravis | v4l2 | replay | simulated");
     visit("device", device, "aravis: id, serial or IP; v4l2: /dev/videoN; replay: folder or video");
-    visit("pixel_format", pixel_format, "aravis: Mono8, RGB8, Bayer??8; v4l2: YUYV, MJPG, RGB3, BGR3");
+    visit("pixel_format", pixel_format,
+          "aravis: Mono8, RGB8, Bayer??8; v4l2: YUYV, MJPG, RGB3, BGR3");
     visit("width", width, "image width, px");
     visit("height", height, "image height, px");
     visit("exposure_us", exposure_us, "exposure, µs");
@@ -71,23 +72,30 @@ struct CameraConfig {
 
 // One image as the camera delivered it, converted to 8-bit BGR (or mono).
 struct CameraFrame {
-  cv::Mat image;                     // CV_8UC3 BGR or CV_8UC1
-  int64_t frame_id = 0;              // the camera's own counter
-  int64_t trigger_seq = -1;          // frame-set sequence; -1 in free run
-  int64_t trigger_utime = 0;         // trigger time, µs since epoch (host clock)
-  int64_t device_timestamp_ns = 0;   // camera clock; 0 when unknown
-  int64_t host_utime = 0;            // complete image received, µs since epoch
+  cv::Mat image;                    // CV_8UC3 BGR or CV_8UC1
+  int64_t frame_id = 0;             // the camera's own counter
+  int64_t trigger_seq = -1;         // frame-set sequence; -1 in free run
+  int64_t trigger_utime = 0;        // trigger time, µs since epoch (host clock)
+  int64_t device_timestamp_ns = 0;  // camera clock; 0 when unknown
+  int64_t host_utime = 0;           // complete image received, µs since epoch
   double exposure_us = 0.0;
   double gain_db = 0.0;
 };
 
 struct CameraStats {
-  int64_t frames = 0;       // complete frames delivered
-  int64_t incomplete = 0;   // incomplete or corrupted buffers dropped
+  int64_t frames = 0;      // complete frames delivered
+  int64_t incomplete = 0;  // incomplete or corrupted buffers dropped
   int64_t timeouts = 0;
   int64_t reconnects = 0;
+  // Software triggers dropped because the camera fell behind: frame-sets
+  // this camera will miss.
+  int64_t missed_triggers = 0;
 };
 
+// Threads (as the capture service uses it): Open, Close and Grab come from
+// the camera's grab thread; Trigger from the trigger thread while Grab may be
+// waiting (never during Open or Close); Stats from the status thread at any
+// time. A backend makes Trigger and Stats safe against the others.
 class CameraBackend {
  public:
   virtual ~CameraBackend() = default;
@@ -107,6 +115,12 @@ class CameraBackend {
 
 // Parses a command-line camera spec "NAME=BACKEND:DEVICE", e.g.
 // "cam0=aravis:127.0.0.1" or "cam1=v4l2:/dev/video0". Throws std::invalid_argument.
+// The other keys keep their defaults, but for the backend's pixel format
+// (DefaultPixelFormat).
 CameraConfig ParseCameraSpec(const std::string& spec);
+
+// The pixel format a camera of `backend` uses when none is given: YUYV for
+// v4l2 (what every UVC camera offers), RGB8 otherwise.
+std::string DefaultPixelFormat(const std::string& backend);
 
 }  // namespace shapesense

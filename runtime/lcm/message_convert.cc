@@ -1,0 +1,574 @@
+#include "runtime/lcm/message_convert.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <numeric>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+#include <stdexcept>
+
+#include "libs/silhouette/silhouette.h"
+
+namespace shapesense {
+namespace {
+
+bool IsBayer(int8_t format) {
+  return format >= image_t::PIXEL_BAYER_RG8 && format <= image_t::PIXEL_BAYER_BG8;
+}
+
+// OpenCV names a Bayer pattern by the second row's second and third pixels;
+// GenICam (and image_t) by the top-left cell read row by row.
+int BayerToBgrCode(int8_t format) {
+  switch (format) {
+    case image_t::PIXEL_BAYER_RG8:
+      return cv::COLOR_BayerBG2BGR;
+    case image_t::PIXEL_BAYER_GR8:
+      return cv::COLOR_BayerGB2BGR;
+    case image_t::PIXEL_BAYER_GB8:
+      return cv::COLOR_BayerGR2BGR;
+    default:
+      return cv::COLOR_BayerRG2BGR;  // PIXEL_BAYER_BG8
+  }
+}
+
+int BayerToGrayCode(int8_t format) {
+  switch (format) {
+    case image_t::PIXEL_BAYER_RG8:
+      return cv::COLOR_BayerBG2GRAY;
+    case image_t::PIXEL_BAYER_GR8:
+      return cv::COLOR_BayerGB2GRAY;
+    case image_t::PIXEL_BAYER_GB8:
+      return cv::COLOR_BayerGR2GRAY;
+    default:
+      return cv::COLOR_BayerRG2GRAY;
+  }
+}
+
+int CvTypeOf(int8_t format) {
+  const int bytes = BytesPerPixel(format);
+  return bytes == 1 ? CV_8UC1 : bytes == 2 ? CV_8UC2 : CV_8UC3;
+}
+
+bool CompressionAllowed(int8_t format, int8_t compression) {
+  if (compression == image_t::COMPRESSION_NONE) return true;
+  if (format == image_t::PIXEL_YUYV) return false;
+  return compression == image_t::COMPRESSION_PNG || !IsBayer(format);
+}
+
+bool HasSignature(const std::vector<uint8_t>& data, int8_t compression) {
+  static constexpr uint8_t kPng[] = {0x89, 'P', 'N', 'G', 0x0D, 0x0A, 0x1A, 0x0A};
+  static constexpr uint8_t kJpeg[] = {0xFF, 0xD8, 0xFF};
+  if (compression == image_t::COMPRESSION_PNG) {
+    return data.size() >= sizeof(kPng) &&
+           std::equal(std::begin(kPng), std::end(kPng), data.begin());
+  }
+  return data.size() >= sizeof(kJpeg) &&
+         std::equal(std::begin(kJpeg), std::end(kJpeg), data.begin());
+}
+
+std::string Expected(const std::string& key, const std::string& what, const std::string& got) {
+  return key + ": expected " + what + ", got " + got;
+}
+
+std::string ValidateStageTimes(int32_t count, const std::vector<stage_time_t>& stages) {
+  if (count < 0 || static_cast<size_t>(count) != stages.size()) {
+    return Expected("num_stage_times", std::to_string(stages.size()) + " (the stages sent)",
+                    std::to_string(count));
+  }
+  for (const stage_time_t& stage : stages) {
+    if (stage.stage.empty()) return Expected("stage_times.stage", "a name", "an empty one");
+    if (stage.duration_us < 0) {
+      return Expected("stage_times[" + stage.stage + "].duration_us", ">= 0",
+                      std::to_string(stage.duration_us));
+    }
+  }
+  return {};
+}
+
+std::string ValidateImageGeometry(const image_t& image) {
+  for (const auto& [key, value] : {std::pair{"width", image.width}, {"height", image.height}}) {
+    if (value < 1 || value > kMaxImageSide) {
+      return Expected(key, "1-" + std::to_string(kMaxImageSide) + " px", std::to_string(value));
+    }
+  }
+  if (BytesPerPixel(image.pixel_format) == 0) {
+    return Expected("pixel_format", "one of the PIXEL_* constants",
+                    std::to_string(image.pixel_format));
+  }
+  if (image.size < 0 || static_cast<size_t>(image.size) != image.data.size()) {
+    return Expected("size", std::to_string(image.data.size()) + " (the bytes sent)",
+                    std::to_string(image.size));
+  }
+  return {};
+}
+
+std::string ValidateRawLayout(const image_t& image) {
+  const int64_t row_bytes = int64_t{image.width} * BytesPerPixel(image.pixel_format);
+  if (image.row_stride < row_bytes) {
+    return Expected("row_stride", ">= " + std::to_string(row_bytes) + " (width x bytes per pixel)",
+                    std::to_string(image.row_stride));
+  }
+  const int64_t needed = int64_t{image.row_stride} * image.height;
+  if (image.size != needed) {
+    return Expected("size",
+                    std::to_string(needed) + " bytes (row_stride " +
+                        std::to_string(image.row_stride) + " x height " +
+                        std::to_string(image.height) + ")",
+                    std::to_string(image.size));
+  }
+  return {};
+}
+
+std::string ValidateCompressedLayout(const image_t& image) {
+  if (!CompressionAllowed(image.pixel_format, image.compression)) {
+    return Expected("compression", "none for " + PixelFormatName(image.pixel_format),
+                    image.compression == image_t::COMPRESSION_PNG ? "PNG" : "JPEG");
+  }
+  if (image.row_stride != 0) {
+    return Expected("row_stride", "0 for a compressed image", std::to_string(image.row_stride));
+  }
+  if (!HasSignature(image.data, image.compression)) {
+    return Expected(
+        "data", image.compression == image_t::COMPRESSION_PNG ? "a PNG stream" : "a JPEG stream",
+        "other bytes");
+  }
+  return {};
+}
+
+std::string ValidateImageTimes(const image_t& image) {
+  if (image.header.utime < 0 || image.trigger_utime < 0 || image.host_utime < 0) {
+    return Expected("header.utime, trigger_utime, host_utime", "times >= 0", "a negative one");
+  }
+  if (!std::isfinite(image.exposure_us) || image.exposure_us < 0 || !std::isfinite(image.gain_db)) {
+    return Expected("exposure_us, gain_db", "finite numbers, exposure >= 0", "something else");
+  }
+  return ValidateStageTimes(image.num_stage_times, image.stage_times);
+}
+
+std::string ValidateImageFields(const image_t& image) {
+  if (std::string error = ValidateImageGeometry(image); !error.empty()) return error;
+  const int8_t compression = image.compression;
+  if (compression != image_t::COMPRESSION_NONE && compression != image_t::COMPRESSION_PNG &&
+      compression != image_t::COMPRESSION_JPEG) {
+    return Expected("compression", "one of the COMPRESSION_* constants",
+                    std::to_string(compression));
+  }
+  std::string error = compression == image_t::COMPRESSION_NONE ? ValidateRawLayout(image)
+                                                               : ValidateCompressedLayout(image);
+  return error.empty() ? ValidateImageTimes(image) : error;
+}
+
+std::string CameraPrefix(const image_t& image) {
+  return (image.camera.empty() ? std::string("(unnamed camera)") : image.camera) + ": ";
+}
+
+// The pixels in the layout of pixel_format: a view of raw bytes, or decoded.
+std::string PixelsOf(const image_t& image, cv::Mat* pixels) {
+  const int type = CvTypeOf(image.pixel_format);
+  if (image.compression == image_t::COMPRESSION_NONE) {
+    // A read-only view: cv::Mat has no const form.
+    *pixels = cv::Mat(image.height, image.width, type, const_cast<uint8_t*>(image.data.data()),
+                      static_cast<size_t>(image.row_stride));
+    return {};
+  }
+  try {
+    *pixels = cv::imdecode(image.data, cv::IMREAD_UNCHANGED);
+  } catch (const cv::Exception& e) {
+    return Expected("data", "a decodable image", std::string("an error (") + e.what() + ")");
+  }
+  if (pixels->empty()) return Expected("data", "a decodable image", "undecodable bytes");
+  if (pixels->type() != type || pixels->cols != image.width || pixels->rows != image.height) {
+    return Expected("data",
+                    "an 8-bit " + std::to_string(CV_MAT_CN(type)) + "-channel image of " +
+                        std::to_string(image.width) + "x" + std::to_string(image.height),
+                    std::to_string(pixels->channels()) + " channels (depth " +
+                        std::to_string(pixels->depth()) + ") of " + std::to_string(pixels->cols) +
+                        "x" + std::to_string(pixels->rows));
+  }
+  return {};
+}
+
+void ConvertToBgr(const cv::Mat& pixels, int8_t format, cv::Mat* bgr) {
+  switch (format) {
+    case image_t::PIXEL_MONO8:
+      cv::cvtColor(pixels, *bgr, cv::COLOR_GRAY2BGR);
+      break;
+    case image_t::PIXEL_BGR8:
+      pixels.copyTo(*bgr);
+      break;
+    case image_t::PIXEL_RGB8:
+      cv::cvtColor(pixels, *bgr, cv::COLOR_RGB2BGR);
+      break;
+    case image_t::PIXEL_YUYV:
+      cv::cvtColor(pixels, *bgr, cv::COLOR_YUV2BGR_YUYV);
+      break;
+    default:
+      cv::cvtColor(pixels, *bgr, BayerToBgrCode(format));
+      break;
+  }
+}
+
+void ConvertToMono(const cv::Mat& pixels, int8_t format, cv::Mat* mono) {
+  switch (format) {
+    case image_t::PIXEL_MONO8:
+      pixels.copyTo(*mono);
+      break;
+    case image_t::PIXEL_BGR8:
+      cv::cvtColor(pixels, *mono, cv::COLOR_BGR2GRAY);
+      break;
+    case image_t::PIXEL_RGB8:
+      cv::cvtColor(pixels, *mono, cv::COLOR_RGB2GRAY);
+      break;
+    case image_t::PIXEL_YUYV:
+      cv::cvtColor(pixels, *mono, cv::COLOR_YUV2GRAY_YUYV);
+      break;
+    default:
+      cv::cvtColor(pixels, *mono, BayerToGrayCode(format));
+      break;
+  }
+}
+
+// An output Mat may be a view (ImageCopy::kViewWhenPossible) of a message
+// long gone: OpenCV would write into it when the size fits, so it is let go
+// of first. One that owns its buffer is reused.
+void ReleaseIfView(cv::Mat* out) {
+  if (out->u == nullptr) out->release();
+}
+
+// The one shared path of ImageMessageToBgr and ImageMessageToMono.
+template <class Convert>
+std::string DecodeImage(const image_t& image, Convert convert) {
+  if (std::string error = ValidateImageMessage(image); !error.empty()) return error;
+  cv::Mat pixels;
+  if (std::string error = PixelsOf(image, &pixels); !error.empty())
+    return CameraPrefix(image) + error;
+  // A demosaic needs 2×2 cells, YUYV pairs of pixels; OpenCV asserts otherwise.
+  if ((IsBayer(image.pixel_format) && (image.width < 2 || image.height < 2)) ||
+      (image.pixel_format == image_t::PIXEL_YUYV && image.width % 2 != 0)) {
+    return CameraPrefix(image) +
+           Expected("width, height", "whole cells of the pixel format",
+                    std::to_string(image.width) + "x" + std::to_string(image.height));
+  }
+  try {
+    convert(pixels);
+  } catch (const cv::Exception& e) {
+    return CameraPrefix(image) + "pixels could not be converted: " + e.what();
+  }
+  return {};
+}
+
+bool AllFinite(const std::vector<double>& values) {
+  return std::all_of(values.begin(), values.end(), [](double v) { return std::isfinite(v); });
+}
+
+bool AllFinitePoints(const std::vector<std::vector<double>>& points) {
+  return std::all_of(points.begin(), points.end(),
+                     [](const std::vector<double>& p) { return p.size() == 3 && AllFinite(p); });
+}
+
+std::vector<double> ToRow(const Vec3& p) { return {p.x(), p.y(), p.z()}; }
+Vec3 FromRow(const std::vector<double>& row) { return Vec3(row[0], row[1], row[2]); }
+
+std::string ValidateVoxelGrid(const voxel_cloud_t& message) {
+  int64_t total = 1;
+  for (int axis = 0; axis < 3; ++axis) {
+    if (message.dims[axis] < 1) {
+      return Expected("dims[" + std::to_string(axis) + "]", ">= 1",
+                      std::to_string(message.dims[axis]));
+    }
+    total *= message.dims[axis];
+    if (total > INT32_MAX) return Expected("dims", "at most 2^31 - 1 voxels in all", "more");
+  }
+  if (!std::isfinite(message.voxel_size) || message.voxel_size <= 0) {
+    return Expected("voxel_size", "a positive number", std::to_string(message.voxel_size));
+  }
+  if (!std::isfinite(message.grid_origin[0]) || !std::isfinite(message.grid_origin[1]) ||
+      !std::isfinite(message.grid_origin[2])) {
+    return Expected("grid_origin", "finite coordinates", "a non-finite one");
+  }
+  return {};
+}
+
+// Indices in [0, total), each once, in any order.
+std::string ValidateVoxelIndices(const std::vector<int32_t>& voxels, int64_t total) {
+  std::vector<int32_t> sorted;
+  const bool ascending = std::is_sorted(voxels.begin(), voxels.end());
+  if (!ascending) {
+    sorted = voxels;
+    std::sort(sorted.begin(), sorted.end());
+  }
+  const std::vector<int32_t>& check = ascending ? voxels : sorted;
+  if (!check.empty() && (check.front() < 0 || check.back() >= total)) {
+    return Expected("voxels", "indices in [0, " + std::to_string(total) + ")",
+                    std::to_string(check.front() < 0 ? check.front() : check.back()));
+  }
+  if (std::adjacent_find(check.begin(), check.end()) != check.end()) {
+    return Expected("voxels", "each index once", "a repeated index");
+  }
+  return {};
+}
+
+}  // namespace
+
+int BytesPerPixel(int8_t pixel_format) {
+  switch (pixel_format) {
+    case image_t::PIXEL_MONO8:
+    case image_t::PIXEL_BAYER_RG8:
+    case image_t::PIXEL_BAYER_GR8:
+    case image_t::PIXEL_BAYER_GB8:
+    case image_t::PIXEL_BAYER_BG8:
+      return 1;
+    case image_t::PIXEL_YUYV:
+      return 2;
+    case image_t::PIXEL_BGR8:
+    case image_t::PIXEL_RGB8:
+      return 3;
+    default:
+      return 0;
+  }
+}
+
+std::string PixelFormatName(int8_t pixel_format) {
+  switch (pixel_format) {
+    case image_t::PIXEL_MONO8:
+      return "MONO8";
+    case image_t::PIXEL_BGR8:
+      return "BGR8";
+    case image_t::PIXEL_RGB8:
+      return "RGB8";
+    case image_t::PIXEL_BAYER_RG8:
+      return "BAYER_RG8";
+    case image_t::PIXEL_BAYER_GR8:
+      return "BAYER_GR8";
+    case image_t::PIXEL_BAYER_GB8:
+      return "BAYER_GB8";
+    case image_t::PIXEL_BAYER_BG8:
+      return "BAYER_BG8";
+    case image_t::PIXEL_YUYV:
+      return "YUYV";
+    default:
+      return "unknown (" + std::to_string(pixel_format) + ")";
+  }
+}
+
+std::string ValidateImageMessage(const image_t& image) {
+  if (image.camera.empty()) return "(unnamed camera): camera: expected a name, got none";
+  const std::string error = ValidateImageFields(image);
+  return error.empty() ? error : CameraPrefix(image) + error;
+}
+
+std::string ImageMessageToBgr(const image_t& image, cv::Mat* bgr, ImageCopy copy) {
+  ReleaseIfView(bgr);
+  return DecodeImage(image, [&](const cv::Mat& pixels) {
+    const bool raw_bgr =
+        image.pixel_format == image_t::PIXEL_BGR8 && image.compression == image_t::COMPRESSION_NONE;
+    if (raw_bgr && copy == ImageCopy::kViewWhenPossible) {
+      *bgr = pixels;
+    } else if (image.compression != image_t::COMPRESSION_NONE &&
+               image.pixel_format == image_t::PIXEL_BGR8) {
+      *bgr = pixels;  // freshly decoded: already a copy
+    } else {
+      ConvertToBgr(pixels, image.pixel_format, bgr);
+    }
+  });
+}
+
+std::string ImageMessageToMono(const image_t& image, cv::Mat* mono) {
+  return DecodeImage(
+      image, [&](const cv::Mat& pixels) { ConvertToMono(pixels, image.pixel_format, mono); });
+}
+
+image_t ImageToMessage(const cv::Mat& pixels, int8_t pixel_format, int8_t compression,
+                       int jpeg_quality) {
+  if (BytesPerPixel(pixel_format) == 0 || pixels.type() != CvTypeOf(pixel_format) ||
+      pixels.empty() || pixels.cols > kMaxImageSide || pixels.rows > kMaxImageSide) {
+    throw std::invalid_argument("ImageToMessage: an image of type " +
+                                std::to_string(pixels.type()) + " does not fit " +
+                                PixelFormatName(pixel_format));
+  }
+  if (!CompressionAllowed(pixel_format, compression) || compression < 0 ||
+      compression > image_t::COMPRESSION_JPEG) {
+    throw std::invalid_argument("ImageToMessage: " + PixelFormatName(pixel_format) +
+                                " cannot be sent with compression " + std::to_string(compression));
+  }
+  image_t image{};
+  image.width = pixels.cols;
+  image.height = pixels.rows;
+  image.pixel_format = pixel_format;
+  image.compression = compression;
+  if (compression == image_t::COMPRESSION_NONE) {
+    image.row_stride = pixels.cols * BytesPerPixel(pixel_format);
+    image.data.resize(static_cast<size_t>(image.row_stride) * static_cast<size_t>(pixels.rows));
+    for (int y = 0; y < pixels.rows; ++y) {
+      std::memcpy(
+          image.data.data() + static_cast<size_t>(y) * static_cast<size_t>(image.row_stride),
+          pixels.ptr(y), static_cast<size_t>(image.row_stride));
+    }
+  } else if (compression == image_t::COMPRESSION_PNG) {
+    cv::imencode(".png", pixels, image.data, {cv::IMWRITE_PNG_COMPRESSION, 1});
+  } else {
+    cv::imencode(".jpg", pixels, image.data, {cv::IMWRITE_JPEG_QUALITY, jpeg_quality});
+  }
+  image.size = static_cast<int32_t>(image.data.size());
+  return image;
+}
+
+cv::Mat MosaicBayer(const cv::Mat& bgr, int8_t bayer_format) {
+  if (bgr.type() != CV_8UC3 || !IsBayer(bayer_format)) {
+    throw std::invalid_argument("MosaicBayer: expected 8-bit BGR and a PIXEL_BAYER_* format");
+  }
+  // Colour (as a BGR channel index) of each pixel of the top-left 2×2 cell.
+  static constexpr int kCells[4][4] = {
+      {2, 1, 1, 0},  // RG: R G / G B
+      {1, 2, 0, 1},  // GR: G R / B G
+      {1, 0, 2, 1},  // GB: G B / R G
+      {0, 1, 1, 2},  // BG: B G / G R
+  };
+  const int* cell = kCells[bayer_format - image_t::PIXEL_BAYER_RG8];
+  cv::Mat mosaic(bgr.size(), CV_8UC1);
+  for (int y = 0; y < bgr.rows; ++y) {
+    const cv::Vec3b* in = bgr.ptr<cv::Vec3b>(y);
+    uint8_t* out = mosaic.ptr<uint8_t>(y);
+    for (int x = 0; x < bgr.cols; ++x) out[x] = in[x][cell[2 * (y % 2) + x % 2]];
+  }
+  return mosaic;
+}
+
+voxel_cloud_t VoxelCloudToMessage(const VoxelCloud& cloud) {
+  voxel_cloud_t message{};
+  for (int axis = 0; axis < 3; ++axis) {
+    message.grid_origin[axis] = cloud.grid.origin[axis];
+    message.dims[axis] = cloud.grid.dims[static_cast<size_t>(axis)];
+  }
+  message.voxel_size = cloud.grid.voxel_size;
+  message.num_voxels = static_cast<int32_t>(cloud.voxels.size());
+  message.voxels = cloud.voxels;
+  message.labels.resize(cloud.voxels.size(), 0);
+  for (size_t i = 0; i < cloud.labels.size() && i < cloud.voxels.size(); ++i) {
+    message.labels[i] = cloud.labels[i] == kLabelMarker ? 1 : 0;
+  }
+  return message;
+}
+
+std::string ValidateVoxelCloudMessage(const voxel_cloud_t& message) {
+  if (std::string error = ValidateVoxelGrid(message); !error.empty()) return error;
+  if (message.num_voxels < 0 || static_cast<size_t>(message.num_voxels) != message.voxels.size() ||
+      message.labels.size() != message.voxels.size()) {
+    return Expected("num_voxels",
+                    std::to_string(message.voxels.size()) + " voxels and as many labels",
+                    std::to_string(message.num_voxels) + " and " +
+                        std::to_string(message.labels.size()) + " labels");
+  }
+  const int64_t total = int64_t{message.dims[0]} * message.dims[1] * message.dims[2];
+  if (std::string error = ValidateVoxelIndices(message.voxels, total); !error.empty()) return error;
+  return ValidateStageTimes(message.num_stage_times, message.stage_times);
+}
+
+std::string VoxelCloudFromMessage(const voxel_cloud_t& message, VoxelCloud* cloud) {
+  if (std::string error = ValidateVoxelCloudMessage(message); !error.empty()) return error;
+  cloud->grid.origin = Vec3(message.grid_origin[0], message.grid_origin[1], message.grid_origin[2]);
+  cloud->grid.voxel_size = message.voxel_size;
+  cloud->grid.dims = {message.dims[0], message.dims[1], message.dims[2]};
+  std::vector<size_t> order(message.voxels.size());
+  std::iota(order.begin(), order.end(), size_t{0});
+  if (!std::is_sorted(message.voxels.begin(), message.voxels.end())) {
+    std::sort(order.begin(), order.end(),
+              [&](size_t a, size_t b) { return message.voxels[a] < message.voxels[b]; });
+  }
+  cloud->voxels.resize(order.size());
+  cloud->labels.resize(order.size());
+  for (size_t i = 0; i < order.size(); ++i) {
+    cloud->voxels[i] = message.voxels[order[i]];
+    cloud->labels[i] = message.labels[order[i]] > 0 ? kLabelMarker : kLabelBody;
+  }
+  return {};
+}
+
+shape_t ShapeToMessage(const ShapeEstimate& shape) {
+  shape_t message{};
+  message.valid = shape.valid;
+  message.error = shape.error;
+  for (const Vec3& p : shape.centerline) message.centerline.push_back(ToRow(p));
+  message.num_points = static_cast<int32_t>(message.centerline.size());
+  message.arc_length = shape.arc_length;
+  message.curvature = shape.curvature;
+  message.arc_length.resize(message.centerline.size(), 0.0);
+  message.curvature.resize(message.centerline.size(), 0.0);
+  for (const Vec3& p : shape.markers) message.markers.push_back(ToRow(p));
+  message.num_markers = static_cast<int32_t>(message.markers.size());
+  message.marker_arc_length = shape.marker_arc_length;
+  message.marker_arc_length.resize(message.markers.size(), 0.0);
+  for (int axis = 0; axis < 3; ++axis) message.tip[axis] = shape.tip[axis];
+  message.length = shape.length;
+  message.centerline_residual_mm = shape.silhouette_residual_mm;
+  return message;
+}
+
+std::string ValidateShapeMessage(const shape_t& message) {
+  const size_t points = message.centerline.size();
+  if (message.num_points < 0 || static_cast<size_t>(message.num_points) != points ||
+      message.arc_length.size() != points || message.curvature.size() != points) {
+    return Expected("num_points", "as many centreline points, arc lengths and curvatures",
+                    std::to_string(message.num_points));
+  }
+  const size_t markers = message.markers.size();
+  if (message.num_markers < 0 || static_cast<size_t>(message.num_markers) != markers ||
+      message.marker_arc_length.size() != markers) {
+    return Expected("num_markers", "as many markers and marker arc lengths",
+                    std::to_string(message.num_markers));
+  }
+  if (!AllFinitePoints(message.centerline) || !AllFinitePoints(message.markers) ||
+      !AllFinite(message.arc_length) || !AllFinite(message.curvature) ||
+      !AllFinite(message.marker_arc_length) || !std::isfinite(message.length)) {
+    return Expected("centerline, markers, arc lengths, curvature, length", "finite numbers",
+                    "others");
+  }
+  if (message.valid && points < 2)
+    return Expected("num_points", ">= 2 for a valid shape", std::to_string(points));
+  return ValidateStageTimes(message.num_stage_times, message.stage_times);
+}
+
+std::string ShapeFromMessage(const shape_t& message, ShapeEstimate* shape) {
+  if (std::string error = ValidateShapeMessage(message); !error.empty()) return error;
+  *shape = ShapeEstimate{};
+  shape->valid = message.valid;
+  shape->error = message.error;
+  for (const auto& row : message.centerline) shape->centerline.push_back(FromRow(row));
+  shape->arc_length = message.arc_length;
+  shape->curvature = message.curvature;
+  for (const auto& row : message.markers) shape->markers.push_back(FromRow(row));
+  shape->marker_arc_length = message.marker_arc_length;
+  shape->tip = Vec3(message.tip[0], message.tip[1], message.tip[2]);
+  shape->length = message.length;
+  shape->silhouette_residual_mm = message.centerline_residual_mm;
+  return {};
+}
+
+stage_time_t MakeStageTime(const std::string& stage, int64_t duration_us, int64_t end_utime) {
+  stage_time_t time{};
+  time.stage = stage;
+  time.duration_us = duration_us;
+  time.end_utime = end_utime;
+  return time;
+}
+
+const stage_time_t* FindStageTime(const std::vector<stage_time_t>& stages,
+                                  const std::string& stage) {
+  for (const stage_time_t& time : stages) {
+    if (time.stage == stage) return &time;
+  }
+  return nullptr;
+}
+
+void MergeStageTime(const stage_time_t& stage, std::vector<stage_time_t>* stages) {
+  for (stage_time_t& time : *stages) {
+    if (time.stage != stage.stage) continue;
+    time.duration_us = std::max(time.duration_us, stage.duration_us);
+    time.end_utime = std::max(time.end_utime, stage.end_utime);
+    return;
+  }
+  stages->push_back(stage);
+}
+
+}  // namespace shapesense

@@ -1,0 +1,181 @@
+#include "runtime/lcm/pipeline_stages.h"
+
+#include <algorithm>
+#include <chrono>
+
+#include "libs/camera/rig_yaml.h"
+#include "libs/core/error.h"
+#include "runtime/file_io.h"
+#include "runtime/lcm/lcm_bus.h"
+#include "runtime/lcm/message_convert.h"
+
+namespace shapesense {
+namespace fs = std::filesystem;
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+int64_t MicrosecondsSince(Clock::time_point start) {
+  return std::chrono::duration_cast<std::chrono::microseconds>(Clock::now() - start).count();
+}
+
+void CheckBackgrounds(const Rig& rig, const std::vector<cv::Mat>& backgrounds) {
+  if (backgrounds.size() != rig.cameras.size()) {
+    throw InputError("expected one background per camera (" + std::to_string(rig.cameras.size()) +
+                     "), got " + std::to_string(backgrounds.size()));
+  }
+  for (size_t i = 0; i < backgrounds.size(); ++i) {
+    const Camera& camera = rig.cameras[i];
+    if (backgrounds[i].type() != CV_8UC3 || backgrounds[i].cols != camera.width ||
+        backgrounds[i].rows != camera.height) {
+      throw InputError("background of camera '" + camera.name + "': expected 8-bit BGR of " +
+                       std::to_string(camera.width) + "x" + std::to_string(camera.height));
+    }
+  }
+}
+
+// Extracts every camera's silhouette of decoded images.
+void ExtractAll(const SilhouetteExtractor& extractor, const std::vector<cv::Mat>& images,
+                const std::vector<cv::Mat>& backgrounds, std::vector<Silhouette>* silhouettes) {
+  silhouettes->resize(images.size());
+  for (size_t i = 0; i < images.size(); ++i) {
+    extractor.Extract(images[i], backgrounds[i], &(*silhouettes)[i]);
+  }
+}
+
+}  // namespace
+
+RigSetup LoadRigSetup(const fs::path& rig_file, const fs::path& background_folder) {
+  RigSetup setup;
+  setup.rig = ParseRigYaml(ReadTextFile(rig_file), rig_file.string());
+  if (background_folder.empty()) return setup;
+  for (const Camera& camera : setup.rig.cameras) {
+    const fs::path path = background_folder / (camera.name + ".png");
+    cv::Mat image = ReadBgrImage(path);
+    if (image.cols != camera.width || image.rows != camera.height) {
+      throw InputError(path.string() + ": expected " + std::to_string(camera.width) + "x" +
+                       std::to_string(camera.height) + " (camera '" + camera.name + "'), got " +
+                       std::to_string(image.cols) + "x" + std::to_string(image.rows));
+    }
+    setup.backgrounds.push_back(std::move(image));
+  }
+  return setup;
+}
+
+fs::path ResolveConfigPath(const fs::path& config_file, const std::string& value) {
+  const fs::path path(value);
+  if (path.empty() || path.is_absolute() || config_file.empty()) return path;
+  return config_file.parent_path() / path;
+}
+
+std::vector<std::string> CameraNames(const Rig& rig) {
+  std::vector<std::string> names;
+  for (const Camera& camera : rig.cameras) names.push_back(camera.name);
+  return names;
+}
+
+std::string DecodeFrameSet(const FrameSet& set, const Rig& rig, std::vector<cv::Mat>* images) {
+  if (set.images.size() != rig.cameras.size()) {
+    return "expected " + std::to_string(rig.cameras.size()) + " images, got " +
+           std::to_string(set.images.size());
+  }
+  images->resize(set.images.size());
+  for (size_t i = 0; i < set.images.size(); ++i) {
+    const Camera& camera = rig.cameras[i];
+    const image_t& image = set.images[i];
+    if (image.width != camera.width || image.height != camera.height) {
+      return camera.name + ": expected " + std::to_string(camera.width) + "x" +
+             std::to_string(camera.height) + " (the rig's), got " + std::to_string(image.width) +
+             "x" + std::to_string(image.height);
+    }
+    const std::string error = ImageMessageToBgr(image, &(*images)[i], ImageCopy::kViewWhenPossible);
+    if (!error.empty()) return error;
+  }
+  return {};
+}
+
+std::vector<stage_time_t> FrameSetStageTimes(const FrameSet& set) {
+  std::vector<stage_time_t> stages;
+  int64_t transport_us = 0;
+  for (size_t i = 0; i < set.images.size(); ++i) {
+    const image_t& image = set.images[i];
+    for (const stage_time_t& stage : image.stage_times) MergeStageTime(stage, &stages);
+    if (image.header.utime > 0 && i < set.receive_utime.size()) {
+      transport_us = std::max(transport_us, set.receive_utime[i] - image.header.utime);
+    }
+  }
+  stages.push_back(MakeStageTime("transport", transport_us, set.complete_utime));
+  return stages;
+}
+
+CarvingStage::CarvingStage(const Rig& rig, std::vector<cv::Mat> backgrounds,
+                           const SilhouetteOptions& silhouette, const CarvingOptions& carving,
+                           const ProgressCallback& table_progress)
+    : rig_(rig),
+      backgrounds_((CheckBackgrounds(rig, backgrounds), std::move(backgrounds))),
+      extractor_(silhouette),
+      carver_(rig, carving, table_progress) {}
+
+std::string CarvingStage::Process(const FrameSet& set, CarvingOutput* out) const {
+  auto start = Clock::now();
+  if (std::string error = DecodeFrameSet(set, rig_, &out->images); !error.empty()) return error;
+  ExtractAll(extractor_, out->images, backgrounds_, &out->silhouettes);
+  const int64_t silhouette_us = MicrosecondsSince(start);
+  const int64_t silhouette_end = NowUtime();
+
+  start = Clock::now();
+  carver_.CarveHierarchical(out->silhouettes, &out->cloud);
+  const int64_t carving_us = MicrosecondsSince(start);
+
+  out->message = VoxelCloudToMessage(out->cloud);
+  out->message.trigger_seq = set.trigger_seq;
+  out->message.trigger_utime = set.trigger_utime;
+  out->message.stage_times = FrameSetStageTimes(set);
+  out->message.stage_times.push_back(MakeStageTime("silhouette", silhouette_us, silhouette_end));
+  out->message.stage_times.push_back(MakeStageTime("carving", carving_us, NowUtime()));
+  out->message.num_stage_times = static_cast<int32_t>(out->message.stage_times.size());
+  return {};
+}
+
+ShapeStage::ShapeStage(const Rig& rig, std::vector<cv::Mat> backgrounds,
+                       const SilhouetteOptions& silhouette, const ShapeOptions& shape)
+    : rig_(rig),
+      backgrounds_(std::move(backgrounds)),
+      wants_images_(shape.refine_with_silhouettes),
+      extractor_(silhouette),
+      estimator_(rig, shape) {
+  if (wants_images_) CheckBackgrounds(rig_, backgrounds_);
+}
+
+std::string ShapeStage::ExtractSilhouettes(const FrameSet& set, ShapeOutput* out) const {
+  if (std::string error = DecodeFrameSet(set, rig_, &out->images); !error.empty()) return error;
+  ExtractAll(extractor_, out->images, backgrounds_, &out->silhouettes);
+  return {};
+}
+
+std::string ShapeStage::Process(const voxel_cloud_t& voxels, const FrameSet* images,
+                                ShapeOutput* out) const {
+  if (std::string error = VoxelCloudFromMessage(voxels, &out->cloud); !error.empty()) return error;
+  const auto start = Clock::now();
+  out->warning.clear();
+  out->silhouettes.clear();
+  if (wants_images_ && images == nullptr) out->warning = "no images; shape not refined";
+  if (wants_images_ && images != nullptr) {
+    if (std::string error = ExtractSilhouettes(*images, out); !error.empty()) {
+      out->warning = error + "; shape not refined";
+      out->silhouettes.clear();
+    }
+  }
+  out->estimate = estimator_.Estimate(out->cloud, out->silhouettes);
+  const int64_t shape_us = MicrosecondsSince(start);
+
+  out->message = ShapeToMessage(out->estimate);
+  out->message.trigger_seq = voxels.trigger_seq;
+  out->message.trigger_utime = voxels.trigger_utime;
+  out->message.stage_times = voxels.stage_times;
+  out->message.stage_times.push_back(MakeStageTime("shape", shape_us, NowUtime()));
+  out->message.num_stage_times = static_cast<int32_t>(out->message.stage_times.size());
+  return {};
+}
+
+}  // namespace shapesense

@@ -1,0 +1,123 @@
+#pragma once
+
+// The sensing chain cut at the LCM channels: frame-set → voxel cloud
+// (CarvingStage, in the carving service) and voxel cloud + frame-set → shape
+// (ShapeStage, in the shape service). `shapesense replay` runs the same two
+// stages on a recorded log, so replay reproduces the live shapes exactly.
+#include <filesystem>
+#include <opencv2/core.hpp>
+#include <string>
+#include <vector>
+
+#include "libs/camera/camera.h"
+#include "libs/carving/carver.h"
+#include "libs/centerline/shape_estimator.h"
+#include "libs/silhouette/silhouette.h"
+#include "runtime/lcm/frame_set_assembler.h"
+#include "shapesense/shape_t.hpp"
+#include "shapesense/voxel_cloud_t.hpp"
+
+namespace shapesense {
+
+// The rig and one background per camera, in rig order.
+struct RigSetup {
+  Rig rig;
+  std::vector<cv::Mat> backgrounds;
+};
+
+// Reads the rig file (OpenCV YAML, docs/dataset.md) and
+// `background_folder`/<camera>.png for each camera; with an empty folder, no
+// backgrounds. InputError naming the file on anything missing or malformed.
+RigSetup LoadRigSetup(const std::filesystem::path& rig_file,
+                      const std::filesystem::path& background_folder);
+
+// A path from a config file: relative ones are relative to the config's folder.
+std::filesystem::path ResolveConfigPath(const std::filesystem::path& config_file,
+                                        const std::string& value);
+
+std::vector<std::string> CameraNames(const Rig& rig);
+
+// Decodes a frame-set's images to 8-bit BGR of their camera's size, in rig
+// order (raw BGR8 images become views of the set's bytes). "" or the reason.
+std::string DecodeFrameSet(const FrameSet& set, const Rig& rig, std::vector<cv::Mat>* images);
+
+// The stage times a frame-set brings: those of its images merged by name
+// (a stage of the set lasted as long as its slowest image), plus
+// "transport": the longest time from an image's publication to its arrival,
+// ending when the set was complete.
+std::vector<stage_time_t> FrameSetStageTimes(const FrameSet& set);
+
+// What CarvingStage produces; kept between frame-sets so buffers are reused.
+struct CarvingOutput {
+  voxel_cloud_t message;  // trigger, grid, voxels, stage times; the header is the publisher's
+  std::vector<Silhouette> silhouettes;
+  std::vector<cv::Mat> images;
+  VoxelCloud cloud;
+};
+
+// Decode, silhouettes ("silhouette": decoding and extraction of every
+// camera), hierarchical carving ("carving").
+class CarvingStage {
+ public:
+  // Builds the carver's lookup table (about 1 s at 256³ voxels). Throws
+  // InputError on backgrounds that do not fit the rig, std::invalid_argument
+  // on options that fail validation.
+  CarvingStage(const Rig& rig, std::vector<cv::Mat> backgrounds,
+               const SilhouetteOptions& silhouette, const CarvingOptions& carving,
+               const ProgressCallback& table_progress = {});
+
+  // "" on success, else why the set could not be carved (an image that does
+  // not decode or does not fit its camera); `out->message` is then stale.
+  std::string Process(const FrameSet& set, CarvingOutput* out) const;
+
+  const Rig& rig() const { return rig_; }
+
+ private:
+  Rig rig_;
+  std::vector<cv::Mat> backgrounds_;
+  SilhouetteExtractor extractor_;
+  Carver carver_;
+};
+
+struct ShapeOutput {
+  shape_t message;  // trigger and stage times from the cloud, + "shape"; header the publisher's
+  ShapeEstimate estimate;  // as measured (shape_t has no tube radius)
+  // Set when the shape was measured without the silhouettes it should have
+  // had (the frame-set was missing or did not decode): the reason.
+  std::string warning;
+  std::vector<Silhouette> silhouettes;
+  std::vector<cv::Mat> images;
+  VoxelCloud cloud;
+};
+
+// Voxel cloud → shape, refined against the silhouettes of the frame-set the
+// cloud was carved from, extracted again here ("shape": extraction and
+// estimation).
+class ShapeStage {
+ public:
+  // `backgrounds` may be empty when shape.refine_with_silhouettes is off.
+  // Throws InputError on backgrounds that do not fit the rig,
+  // std::invalid_argument on options that fail validation.
+  ShapeStage(const Rig& rig, std::vector<cv::Mat> backgrounds, const SilhouetteOptions& silhouette,
+             const ShapeOptions& shape);
+
+  // Whether Process wants the frame-set (refinement is on).
+  bool wants_images() const { return wants_images_; }
+
+  // `images`: the frame-set of the cloud, or nullptr. "" when a shape was
+  // produced (valid or not: an estimate that fails carries its error in the
+  // message); else why the cloud itself is malformed, and nothing to publish.
+  std::string Process(const voxel_cloud_t& voxels, const FrameSet* images, ShapeOutput* out) const;
+
+ private:
+  // Fills out->silhouettes from the set; "" or why they could not be had.
+  std::string ExtractSilhouettes(const FrameSet& set, ShapeOutput* out) const;
+
+  Rig rig_;
+  std::vector<cv::Mat> backgrounds_;
+  bool wants_images_;
+  SilhouetteExtractor extractor_;
+  ShapeEstimator estimator_;
+};
+
+}  // namespace shapesense

@@ -1,0 +1,23 @@
+#pragma once
+
+// The main loop every LCM service shares: handle messages on one thread,
+// and give the service the time for its timeouts and 1 Hz status.
+#include <atomic>
+#include <cstdint>
+#include <functional>
+
+#include "runtime/lcm/lcm_bus.h"
+
+namespace shapesense {
+
+// Handles `bus` until `stop` is set or `duration_s` has passed (0: no
+// limit), calling `poll(now_utime)` after every message and at least every
+// 20 ms. Callbacks and `poll` all run on the calling thread.
+void RunBusLoop(LcmBus& bus, const std::atomic<bool>& stop, double duration_s,
+                const std::function<void(int64_t now_utime)>& poll);
+
+// A flag that SIGINT and SIGTERM set (installs the handlers on first use);
+// a service's main passes it as `stop`.
+const std::atomic<bool>& StopFlagOnSignals();
+
+}  // namespace shapesense

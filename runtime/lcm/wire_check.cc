@@ -1,0 +1,95 @@
+#include "runtime/lcm/wire_check.h"
+
+namespace shapesense {
+namespace {
+
+// Sizes on the wire (LCM encodes big-endian, booleans as one byte).
+constexpr size_t kHash = 8;
+constexpr size_t kHeader = 16;     // header_t: seq, utime
+constexpr size_t kStageTail = 16;  // stage_time_t after its name: duration_us, end_utime
+constexpr size_t kImageFixed = 4 + 4 + 4 + 1 + 1 + 4 + 4 + 8 + 8 + 8 + 8;  // width ... host_utime
+constexpr size_t kVoxelFixed = 8 + 8 + 3 * 8 + 8 + 3 * 4;                  // trigger_seq ... dims
+constexpr size_t kShapeTail = 3 * 8 + 8 + 1 + 4 * 8 + 8 + 8;  // tip ... configuration_residual_mm
+
+// Walks a buffer, failing as soon as a length does not fit.
+class WireWalker {
+ public:
+  WireWalker(const uint8_t* data, size_t size) : data_(data), size_(size) {}
+
+  bool Skip(size_t bytes) {
+    if (bytes > size_ - pos_) return false;
+    pos_ += bytes;
+    return true;
+  }
+  // A count or length: a non-negative int32.
+  bool Count(int64_t* count) {
+    if (4 > size_ - pos_) return false;
+    const uint8_t* p = data_ + pos_;
+    const uint32_t raw =
+        (uint32_t{p[0]} << 24) | (uint32_t{p[1]} << 16) | (uint32_t{p[2]} << 8) | p[3];
+    pos_ += 4;
+    *count = static_cast<int32_t>(raw);
+    return *count >= 0;
+  }
+  // An array of `count` elements of `element_bytes` each.
+  bool SkipArray(int64_t count, size_t element_bytes) {
+    const size_t left = size_ - pos_;
+    if (element_bytes > 0 && static_cast<size_t>(count) > left / element_bytes) return false;
+    pos_ += static_cast<size_t>(count) * element_bytes;
+    return true;
+  }
+  // LCM strings carry their length including the terminating zero, so at least 1.
+  bool SkipString() {
+    int64_t length = 0;
+    return Count(&length) && length >= 1 && Skip(static_cast<size_t>(length));
+  }
+  bool StageTimes() {
+    int64_t count = 0;
+    if (!Count(&count)) return false;
+    for (int64_t i = 0; i < count; ++i) {
+      if (!SkipString() || !Skip(kStageTail)) return false;
+    }
+    return true;
+  }
+  bool AtEnd() const { return pos_ == size_; }
+
+ private:
+  const uint8_t* data_;
+  size_t size_;
+  size_t pos_ = 0;
+};
+
+}  // namespace
+
+int64_t WireFingerprint(const uint8_t* data, size_t size) {
+  if (size < kHash) return 0;
+  uint64_t hash = 0;
+  for (size_t i = 0; i < kHash; ++i) hash = (hash << 8) | data[i];
+  return static_cast<int64_t>(hash);
+}
+
+bool WireCheck<image_t>::Plausible(const uint8_t* data, size_t size) {
+  WireWalker walk(data, size);
+  int64_t bytes = 0;
+  return walk.Skip(kHash + kHeader) && walk.SkipString() && walk.Skip(kImageFixed) &&
+         walk.StageTimes() && walk.Count(&bytes) && walk.SkipArray(bytes, 1) && walk.AtEnd();
+}
+
+bool WireCheck<voxel_cloud_t>::Plausible(const uint8_t* data, size_t size) {
+  WireWalker walk(data, size);
+  int64_t voxels = 0;
+  return walk.Skip(kHash + kHeader + kVoxelFixed) && walk.Count(&voxels) &&
+         walk.SkipArray(voxels, 4 + 1) && walk.StageTimes() && walk.AtEnd();
+}
+
+bool WireCheck<shape_t>::Plausible(const uint8_t* data, size_t size) {
+  WireWalker walk(data, size);
+  int64_t points = 0;
+  int64_t markers = 0;
+  return walk.Skip(kHash + kHeader + 8 + 8 + 1) && walk.SkipString() && walk.Count(&points) &&
+         walk.SkipArray(points, 3 * 8 + 8 + 8) && walk.Count(&markers) &&
+         walk.SkipArray(markers, 3 * 8 + 8) && walk.Skip(kShapeTail) && walk.StageTimes() &&
+         walk.AtEnd();
+}
+
+}  // namespace shapesense

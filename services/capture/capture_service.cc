@@ -1,0 +1,368 @@
+#include "services/capture/capture_service.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <latch>
+#include <mutex>
+#include <thread>
+#include <vector>
+
+#include "libs/core/error.h"
+#include "runtime/config_file.h"
+#include "runtime/lcm/channels.h"
+#include "runtime/lcm/service_status.h"
+#include "services/capture/image_message.h"
+#include "services/capture/trigger_queue.h"
+#include "services/rig_sim/frame_set_truth.h"
+
+namespace shapesense {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+constexpr auto kGrabTimeout = std::chrono::milliseconds(100);  // bounds the reaction to a stop
+constexpr auto kStatusTick = std::chrono::milliseconds(50);
+
+// One camera, its grab thread and its trigger relay.
+struct CameraSlot {
+  CameraConfig config;
+  std::unique_ptr<CameraBackend> backend;
+  std::mutex open_mutex;  // Open and Close against the relay's Trigger
+  std::atomic<bool> up{false};
+  std::atomic<int64_t> missed_triggers{0};  // frame-sets the camera was not triggered for
+  TriggerQueue relay{8};
+  // Grab thread only:
+  bool failing = false;
+  bool gap_open = false;  // an outage whose end (the next image) is still to be reported
+  int64_t down_since_utime = 0;
+  int64_t last_image_utime = 0;  // host time of the last image published, 0: none yet
+  int64_t last_image_seq = -1;   // its trigger sequence
+  Clock::time_point last_attempt{};
+  int64_t published = 0;
+  int64_t outages = 0;
+  // Status (main) thread only: what of the backend's counters the status has counted.
+  int64_t counted_drops = 0;
+};
+
+// A backend's message without its leading "NAME: ", which the service adds itself.
+std::string Unnamed(const CameraSlot& slot, const std::string& what) {
+  const std::string prefix = slot.config.name + ": ";
+  return what.compare(0, prefix.size(), prefix) == 0 ? what.substr(prefix.size()) : what;
+}
+
+std::string Seconds(double seconds) {
+  char text[32];
+  std::snprintf(text, sizeof(text), "%.3g s", seconds);
+  return text;
+}
+
+void LogToStderr(const std::string& line) { std::fprintf(stderr, "[capture] %s\n", line.c_str()); }
+
+// Real cameras must give the configured size; replay and simulated images have their source's.
+bool HasConfiguredSize(const CameraConfig& config, const cv::Mat& image) {
+  if (config.backend != "aravis" && config.backend != "v4l2") return true;
+  return image.cols == config.width && image.rows == config.height;
+}
+
+class CaptureService {
+ public:
+  CaptureService(const CaptureServiceArgs& args, LcmBus& bus)
+      : args_(args),
+        options_(args.options),
+        bus_(bus),
+        compression_(ParseCompression(args.options.compression)),
+        log_(args.log ? args.log : LogToStderr),
+        started_(static_cast<std::ptrdiff_t>(args.options.cameras.size())) {}
+
+  CaptureSummary Run(const std::atomic<bool>& stop);
+
+ private:
+  template <class Message>
+  bool Publish(const std::string& channel, const Message& message) {
+    std::lock_guard lock(publish_mutex_);
+    return bus_.Publish(channel, message);
+  }
+  void MakeSlots();
+  bool TryOpen(CameraSlot& slot);
+  void MarkDown(CameraSlot& slot, const std::string& why);
+  void GrabLoop(CameraSlot& slot);
+  void Grab(CameraSlot& slot);
+  void PublishFrame(CameraSlot& slot, const CameraFrame& frame);
+  void ReportGap(CameraSlot& slot, const CameraFrame& frame);
+  void TriggerLoop();
+  void TriggerAll(int64_t seq, int64_t utime);
+  void RelayLoop(CameraSlot& slot);
+  void PublishTruth(int64_t seq, int64_t utime);
+  void UpdateStatus();
+  void SleepUntil(Clock::time_point until) const;
+  CaptureSummary Summary() const;
+
+  const CaptureServiceArgs& args_;
+  const CaptureServiceOptions& options_;
+  LcmBus& bus_;
+  const ImageCompression compression_;
+  const std::function<void(const std::string&)> log_;
+  std::mutex publish_mutex_;
+  ServiceStatus status_{"capture"};
+  std::shared_ptr<const SimulatedWorld> world_;
+  std::vector<std::unique_ptr<CameraSlot>> slots_;
+  std::latch started_;  // every camera has had its first attempt to open
+  std::atomic<bool> stopping_{false};
+  std::atomic<int64_t> triggers_{0};
+  int64_t truth_seq_ = 0;
+  int64_t stale_trigger_us_ = 0;
+};
+
+void CaptureService::MakeSlots() {
+  const BackendContext context{world_};
+  for (const CameraConfig& config : options_.cameras) {
+    auto slot = std::make_unique<CameraSlot>();
+    slot->config = config;
+    slot->backend = args_.make_backend ? args_.make_backend(config, context)
+                                       : MakeCameraBackend(config, context);
+    slots_.push_back(std::move(slot));
+  }
+}
+
+bool CaptureService::TryOpen(CameraSlot& slot) {
+  std::lock_guard lock(slot.open_mutex);
+  slot.last_attempt = Clock::now();
+  try {
+    slot.backend->Open();
+  } catch (const std::exception& e) {
+    if (!slot.failing) MarkDown(slot, "cannot open: " + Unnamed(slot, e.what()));
+    return false;
+  }
+  if (slot.failing) {
+    const double seconds = static_cast<double>(NowUtime() - slot.down_since_utime) * 1e-6;
+    log_(slot.config.name + ": reopened after " + Seconds(seconds) + " down");
+  }
+  slot.failing = false;
+  slot.up = true;
+  return true;
+}
+
+// On the slot's grab thread, holding slot.open_mutex.
+void CaptureService::MarkDown(CameraSlot& slot, const std::string& why) {
+  slot.up = false;
+  slot.failing = true;
+  ++slot.outages;
+  slot.gap_open = true;
+  slot.down_since_utime = NowUtime();
+  const std::string line =
+      slot.config.name + ": " + why + "; retrying every " + Seconds(options_.reconnect_interval_s);
+  log_(line);
+  status_.Error(line);
+}
+
+void CaptureService::GrabLoop(CameraSlot& slot) {
+  TryOpen(slot);
+  started_.count_down();
+  const auto retry = std::chrono::duration_cast<Clock::duration>(
+      std::chrono::duration<double>(options_.reconnect_interval_s));
+  while (!stopping_) {
+    if (slot.up) {
+      Grab(slot);
+    } else {
+      SleepUntil(slot.last_attempt + retry);
+      if (!stopping_) TryOpen(slot);
+    }
+  }
+  std::lock_guard lock(slot.open_mutex);
+  slot.backend->Close();
+  slot.up = false;
+}
+
+void CaptureService::Grab(CameraSlot& slot) {
+  CameraFrame frame;
+  try {
+    if (slot.backend->Grab(kGrabTimeout, &frame)) PublishFrame(slot, frame);
+  } catch (const std::exception& e) {
+    std::lock_guard lock(slot.open_mutex);
+    slot.backend->Close();
+    // Backends say "lost (why)" themselves; anything else thrown by Grab loses the camera too.
+    const std::string what = Unnamed(slot, e.what());
+    MarkDown(slot, what.find("lost") != std::string::npos ? what : "lost: " + what);
+  }
+}
+
+void CaptureService::PublishFrame(CameraSlot& slot, const CameraFrame& frame) {
+  status_.Received();
+  if (!HasConfiguredSize(slot.config, frame.image)) {
+    status_.Error(slot.config.name + ": dropped an image of the wrong size");
+    return;
+  }
+  const image_t message = ToImageMessage(slot.config.name, frame, slot.published, NowUtime(),
+                                         compression_, options_.png_level);
+  if (!Publish(channels::Image(slot.config.name), message)) {
+    status_.Error(slot.config.name + ": LCM publish failed");
+    return;
+  }
+  ++slot.published;
+  status_.Published();
+  if (slot.gap_open) ReportGap(slot, frame);
+  slot.last_image_utime = frame.host_utime;
+  slot.last_image_seq = frame.trigger_seq;
+}
+
+// The first image after an outage: how long the camera gave none, and (when
+// triggered in software) which frame-sets it missed.
+void CaptureService::ReportGap(CameraSlot& slot, const CameraFrame& frame) {
+  slot.gap_open = false;
+  std::string line = slot.config.name + ": images again";
+  if (slot.last_image_utime > 0) {
+    line += " after " +
+            Seconds(static_cast<double>(frame.host_utime - slot.last_image_utime) * 1e-6) +
+            " without";
+  }
+  if (frame.trigger_seq >= 0) {
+    const int64_t missed = frame.trigger_seq - slot.last_image_seq - 1;
+    line += ", " + std::to_string(missed) + " frame-sets missed (" +
+            std::to_string(slot.last_image_seq + 1) + "-" + std::to_string(frame.trigger_seq - 1) +
+            ")";
+  }
+  log_(line);
+}
+
+// Posts the trigger to every software-triggered camera's relay: the trigger
+// thread never waits on a camera (a vanished GigE camera blocks its trigger
+// for seconds).
+void CaptureService::TriggerAll(int64_t seq, int64_t utime) {
+  for (const auto& slot : slots_) {
+    if (slot->config.Trigger() != TriggerMode::kSoftware) continue;
+    if (slot->up) {
+      slot->relay.Push({seq, utime});
+    } else {
+      ++slot->missed_triggers;
+    }
+  }
+}
+
+// Triggers one camera. A trigger that waited too long (the camera was busy
+// or blocked) is skipped: its exposure would not belong to its frame-set.
+void CaptureService::RelayLoop(CameraSlot& slot) {
+  while (!stopping_) {
+    const std::optional<QueuedTrigger> trigger = slot.relay.Pop(kGrabTimeout);
+    if (!trigger) continue;
+    // A camera being opened or closed is skipped rather than waited for.
+    std::unique_lock lock(slot.open_mutex, std::try_to_lock);
+    if (!lock.owns_lock() || !slot.up || NowUtime() - trigger->utime > stale_trigger_us_) {
+      ++slot.missed_triggers;
+      continue;
+    }
+    try {
+      slot.backend->Trigger(trigger->seq, trigger->utime);
+    } catch (const std::exception&) {
+      ++slot.missed_triggers;  // the grab thread finds out whether the camera is lost
+    }
+  }
+}
+
+void CaptureService::PublishTruth(int64_t seq, int64_t utime) {
+  const TrajectoryPose pose = world_->PoseAtUtime(utime);
+  const TubeScene scene = SceneOf(world_->options().trajectory, world_->rig(), pose);
+  Publish(channels::kTruth, FrameSetTruth(scene, pose, seq, utime, truth_seq_++, NowUtime()));
+}
+
+void CaptureService::TriggerLoop() {
+  started_.wait();
+  const auto period = std::chrono::duration_cast<Clock::duration>(
+      std::chrono::duration<double>(1.0 / options_.trigger_rate_hz));
+  Clock::time_point next = Clock::now();
+  for (int64_t seq = 0; !stopping_; ++seq) {
+    SleepUntil(next);
+    if (stopping_) break;
+    const int64_t utime = NowUtime();
+    TriggerAll(seq, utime);
+    if (world_ && options_.publish_truth) PublishTruth(seq, utime);
+    triggers_ = seq + 1;
+    // After a stall the clock restarts from now rather than firing a burst.
+    next = std::max(next + period, Clock::now());
+  }
+}
+
+void CaptureService::SleepUntil(Clock::time_point until) const {
+  while (!stopping_ && Clock::now() < until) {
+    std::this_thread::sleep_for(std::min<Clock::duration>(kStatusTick, until - Clock::now()));
+  }
+}
+
+void CaptureService::UpdateStatus() {
+  for (const auto& slot : slots_) {
+    const CameraStats stats = slot->backend->Stats();
+    const int64_t drops =
+        stats.incomplete + stats.missed_triggers + slot->missed_triggers + slot->relay.Dropped();
+    status_.Dropped(drops - slot->counted_drops);
+    slot->counted_drops = drops;
+  }
+  std::lock_guard lock(publish_mutex_);
+  status_.MaybePublish(bus_, NowUtime());
+}
+
+CaptureSummary CaptureService::Summary() const {
+  CaptureSummary summary;
+  summary.triggers = triggers_;
+  for (const auto& slot : slots_) {
+    summary.cameras[slot->config.name] = {slot->published, slot->outages,
+                                          slot->missed_triggers + slot->relay.Dropped(),
+                                          slot->backend->Stats()};
+  }
+  return summary;
+}
+
+CaptureSummary CaptureService::Run(const std::atomic<bool>& stop) {
+  world_ = MakeSimulatedWorld(options_, NowUtime());
+  MakeSlots();
+  // Four trigger periods late, or 250 ms, whichever is longer, a trigger is
+  // stale: long enough for a busy machine's scheduling, short of a blocked camera.
+  stale_trigger_us_ =
+      std::max<int64_t>(250'000, static_cast<int64_t>(4e6 / options_.trigger_rate_hz));
+  std::vector<std::thread> threads;
+  bool any_software = false;
+  for (const auto& slot : slots_) {
+    threads.emplace_back([this, s = slot.get()] { GrabLoop(*s); });
+    if (slot->config.Trigger() != TriggerMode::kSoftware) continue;
+    any_software = true;
+    threads.emplace_back([this, s = slot.get()] { RelayLoop(*s); });
+  }
+  if (any_software) threads.emplace_back([this] { TriggerLoop(); });
+  const Clock::time_point end = Clock::now() + std::chrono::duration_cast<Clock::duration>(
+                                                   std::chrono::duration<double>(args_.duration_s));
+  while (!stop && (args_.duration_s <= 0.0 || Clock::now() < end)) {
+    std::this_thread::sleep_for(kStatusTick);
+    UpdateStatus();
+  }
+  stopping_ = true;
+  for (std::thread& thread : threads) thread.join();
+  UpdateStatus();
+  return Summary();
+}
+
+}  // namespace
+
+std::shared_ptr<const SimulatedWorld> MakeSimulatedWorld(const CaptureServiceOptions& options,
+                                                         int64_t origin_utime) {
+  const bool any_simulated =
+      std::any_of(options.cameras.begin(), options.cameras.end(),
+                  [](const CameraConfig& c) { return c.backend == "simulated"; });
+  if (!any_simulated) return nullptr;
+  SimulationOptions simulation = options.simulation;
+  if (!simulation.trajectory_file.empty()) {
+    simulation.trajectory = LoadOptionsFile<TrajectoryOptions>(simulation.trajectory_file);
+  }
+  return std::make_shared<SimulatedWorld>(LoadSimulationRig(options.rig), simulation, origin_utime);
+}
+
+CaptureSummary RunCaptureService(const CaptureServiceArgs& args, const std::atomic<bool>& stop,
+                                 LcmBus& bus) {
+  if (const std::string error = args.options.Validate(); !error.empty()) throw InputError(error);
+  CaptureService service(args, bus);
+  return service.Run(stop);
+}
+
+CaptureSummary RunCaptureService(const CaptureServiceArgs& args, const std::atomic<bool>& stop) {
+  LcmBus bus(args.lcm_url);
+  return RunCaptureService(args, stop, bus);
+}
+
+}  // namespace shapesense

@@ -1,0 +1,167 @@
+#include "services/carving/carving_service.h"
+
+#include "libs/core/error.h"
+#include "runtime/lcm/channels.h"
+#include "runtime/lcm/message_convert.h"
+#include "runtime/lcm/service_config.h"
+#include "runtime/lcm/service_loop.h"
+
+namespace shapesense {
+namespace {
+
+std::string FrameSetName(const FrameSet& set) {
+  return set.trigger_seq >= 0 ? "frame-set " + std::to_string(set.trigger_seq)
+                              : "frame-set at " + std::to_string(set.trigger_utime) + " us";
+}
+
+}  // namespace
+
+std::string CarvingServiceOptions::Validate() const {
+  if (rig.empty()) return "rig: expected the rig file, got nothing";
+  if (backgrounds.empty()) return "backgrounds: expected the folder of backgrounds, got nothing";
+  for (const auto& [section, error] :
+       {std::pair{"silhouette.", silhouette.Validate()}, std::pair{"carving.", carving.Validate()},
+        std::pair{"assembly.", assembly.Validate()}}) {
+    if (!error.empty()) return section + error;
+  }
+  if (queue_capacity < 1 || queue_capacity > 100) {
+    return "queue_capacity: expected 1-100, got " + std::to_string(queue_capacity);
+  }
+  if (!(silhouette_rate_hz >= 0 && silhouette_rate_hz <= 100)) {
+    return "silhouette_rate_hz: expected 0-100, got " + std::to_string(silhouette_rate_hz);
+  }
+  return {};
+}
+
+CarvingService::CarvingService(const CarvingServiceOptions& options, RigSetup setup, LcmBus& bus,
+                               CarvingServiceHooks hooks)
+    : options_(options),
+      bus_(bus),
+      hooks_(std::move(hooks)),
+      stage_(setup.rig, std::move(setup.backgrounds), options.silhouette, options.carving),
+      assembler_(CameraNames(setup.rig), options.assembly),
+      queue_(static_cast<size_t>(options.queue_capacity)) {
+  bus_.Subscribe<image_t>(channels::kImagePattern,
+                          [this](const image_t& image, const std::string&, int64_t receive_utime) {
+                            OnImage(image, receive_utime);
+                          });
+  worker_ = std::thread([this] { Work(); });
+}
+
+CarvingService::~CarvingService() {
+  stopping_ = true;
+  queue_.Close();
+  worker_.join();
+}
+
+void CarvingService::OnImage(const image_t& image, int64_t receive_utime) {
+  status_.Received();
+  if (const std::string error = ValidateImageMessage(image); !error.empty()) {
+    status_.Rejected();
+    status_.Note(error);
+    return;
+  }
+  const int64_t dropped_before = assembler_.counters().DroppedSets();
+  AssemblyResult result = assembler_.Add(image, receive_utime);
+  CountAssemblyDrops(dropped_before);
+  if (result.outcome == AssemblyOutcome::kCompleted) {
+    if (!queue_.Push(std::move(*result.completed))) {
+      status_.Dropped();
+      status_.Note("overload: the oldest waiting frame-set was dropped");
+    }
+    status_.SetQueueDepth(static_cast<int>(queue_.Size()));
+  } else if (result.outcome != AssemblyOutcome::kPending) {
+    status_.Rejected();
+    status_.Note(image.camera + ": " + AssemblyOutcomeName(result.outcome) + " (trigger " +
+                 std::to_string(image.trigger_seq) + ")");
+  }
+}
+
+void CarvingService::CountAssemblyDrops(int64_t before) {
+  const int64_t dropped = assembler_.counters().DroppedSets() - before;
+  if (dropped > 0) {
+    status_.Dropped(dropped);
+    status_.Note(assembler_.last_drop());
+  }
+}
+
+void CarvingService::Poll(int64_t now_utime) {
+  const int64_t dropped_before = assembler_.counters().DroppedSets();
+  assembler_.Expire(now_utime);
+  CountAssemblyDrops(dropped_before);
+  status_.SetQueueDepth(static_cast<int>(queue_.Size()));
+  status_.MaybePublish(bus_, now_utime);
+}
+
+service_status_t CarvingService::Status(int64_t now_utime) {
+  return status_.Snapshot(now_utime, bus_.Rejected());
+}
+
+void CarvingService::Work() {
+  while (!stopping_) {
+    std::optional<FrameSet> set = queue_.Pop(std::chrono::milliseconds(100));
+    if (!set) continue;
+    status_.SetQueueDepth(static_cast<int>(queue_.Size()));
+    if (hooks_.before_carving) hooks_.before_carving(*set);
+    try {
+      CarveAndPublish(*set);
+    } catch (const std::exception& e) {
+      status_.Error(FrameSetName(*set) + ": " + e.what());
+    }
+  }
+}
+
+void CarvingService::CarveAndPublish(const FrameSet& set) {
+  if (const std::string error = stage_.Process(set, &output_); !error.empty()) {
+    status_.Error(FrameSetName(set) + ": " + error);
+    return;
+  }
+  output_.message.header.seq = voxels_seq_++;
+  output_.message.header.utime = NowUtime();
+  if (!bus_.Publish(channels::kVoxels, output_.message)) {
+    status_.Error("could not publish on " + std::string(channels::kVoxels));
+    return;
+  }
+  status_.Published();
+  MaybePublishSilhouettes(set);
+}
+
+void CarvingService::MaybePublishSilhouettes(const FrameSet& set) {
+  if (options_.silhouette_rate_hz <= 0) return;
+  const int64_t now = NowUtime();
+  if (now - last_silhouette_utime_ < static_cast<int64_t>(1e6 / options_.silhouette_rate_hz))
+    return;
+  last_silhouette_utime_ = now;
+  for (size_t i = 0; i < output_.silhouettes.size(); ++i) {
+    image_t message = ImageToMessage(output_.silhouettes[i].mask, image_t::PIXEL_MONO8);
+    message.header.seq = silhouette_seq_;
+    message.header.utime = now;
+    message.camera = set.images[i].camera;
+    message.trigger_seq = set.trigger_seq;
+    message.trigger_utime = set.trigger_utime;
+    message.host_utime = now;
+    bus_.Publish(channels::Silhouette(message.camera), message);
+  }
+  ++silhouette_seq_;
+}
+
+CarvingServiceOptions LoadCarvingServiceOptions(const CarvingServiceArgs& args) {
+  return LoadServiceOptions<CarvingServiceOptions>(args.config,
+                                                   {args.rig, args.backgrounds, args.lcm_url});
+}
+
+service_status_t RunCarvingService(const CarvingServiceArgs& args, const std::atomic<bool>& stop,
+                                   std::ostream& log) {
+  const CarvingServiceOptions options = LoadCarvingServiceOptions(args);
+  RigSetup setup = LoadRigSetup(options.rig, options.backgrounds);
+  log << "shapesense-carving: " << setup.rig.cameras.size() << " cameras, voxel size "
+      << options.carving.voxel_size << " mm; building the carving table\n";
+  LcmBus bus(options.lcm_url);
+  CarvingService service(options, std::move(setup), bus);
+  log << "shapesense-carving: running on "
+      << (options.lcm_url.empty() ? "LCM's default" : options.lcm_url) << '\n';
+  RunBusLoop(bus, stop, args.duration_s, [&](int64_t now) { service.Poll(now); });
+  return service.Status(NowUtime());
+}
+
+}  // namespace shapesense

@@ -1,0 +1,127 @@
+#pragma once
+
+// shapesense-carving: camera images → frame-sets → silhouettes → voxel
+// cloud, over LCM. The LCM callback only checks and assembles (it never
+// blocks or throws); a bounded queue hands complete frame-sets to one
+// worker, dropping the oldest on overload.
+#include <atomic>
+#include <filesystem>
+#include <functional>
+#include <memory>
+#include <optional>
+#include <ostream>
+#include <string>
+#include <thread>
+
+#include "libs/carving/carver.h"
+#include "libs/silhouette/silhouette.h"
+#include "runtime/lcm/bounded_queue.h"
+#include "runtime/lcm/frame_set_assembler.h"
+#include "runtime/lcm/lcm_bus.h"
+#include "runtime/lcm/pipeline_stages.h"
+#include "runtime/lcm/service_status.h"
+
+namespace shapesense {
+
+// config/carving_service.yaml documents every key.
+struct CarvingServiceOptions {
+  // Rig file and the folder of backgrounds (<camera>.png); relative paths are
+  // relative to the config file's folder.
+  std::string rig;
+  std::string backgrounds;
+  SilhouetteOptions silhouette;
+  CarvingOptions carving;
+  FrameSetAssemblyOptions assembly;
+  // Complete frame-sets waiting for the worker; on overload the oldest is dropped.
+  int queue_capacity = 2;
+  // Silhouettes published for monitoring, per second (0: none).
+  double silhouette_rate_hz = 1.0;
+  // LCM provider URL; empty: LCM_DEFAULT_URL or LCM's default.
+  std::string lcm_url;
+
+  template <class Visitor>
+  void VisitFields(Visitor&& visit) {
+    visit("rig", rig, "rig file (OpenCV YAML), relative to this file");
+    visit("backgrounds", backgrounds, "folder of <camera>.png backgrounds, relative to this file");
+    visit("silhouette", silhouette, "silhouette extraction");
+    visit("carving", carving, "voxel carving");
+    visit("assembly", assembly, "frame-set assembly");
+    visit("queue_capacity", queue_capacity, "frame-sets waiting for the worker (1-100)");
+    visit("silhouette_rate_hz", silhouette_rate_hz,
+          "monitoring silhouettes per second (0-100, 0: off)");
+    visit("lcm_url", lcm_url, "LCM provider URL (empty: LCM_DEFAULT_URL or LCM's default)");
+  }
+  std::string Validate() const;
+};
+
+// Seams for tests; empty in the service.
+struct CarvingServiceHooks {
+  // Called by the worker before it carves a frame-set (a test can hold the
+  // worker here to overload the queue).
+  std::function<void(const FrameSet&)> before_carving;
+};
+
+// The service on a bus that someone else handles (RunCarvingService, or a
+// test running several services on one memq:// bus).
+// LcmBus cannot unsubscribe: the bus must outlive the service and must not
+// be handled once the service is gone.
+class CarvingService {
+ public:
+  // Builds the carving table (about 1 s at 256³ voxels), subscribes to the
+  // camera channels and starts the worker. `options` validated, `setup` with
+  // backgrounds. Throws InputError on backgrounds that do not fit the rig.
+  CarvingService(const CarvingServiceOptions& options, RigSetup setup, LcmBus& bus,
+                 CarvingServiceHooks hooks = {});
+  ~CarvingService();
+  CarvingService(const CarvingService&) = delete;
+  CarvingService& operator=(const CarvingService&) = delete;
+
+  // Drops frame-sets that timed out and publishes the status when due. Call
+  // from the thread that handles the bus.
+  void Poll(int64_t now_utime);
+
+  // The status as it would be published now.
+  service_status_t Status(int64_t now_utime);
+  const AssemblyCounters& assembly() const { return assembler_.counters(); }
+
+ private:
+  void OnImage(const image_t& image, int64_t receive_utime);
+  void CountAssemblyDrops(int64_t before);
+  void Work();
+  void CarveAndPublish(const FrameSet& set);
+  void MaybePublishSilhouettes(const FrameSet& set);
+
+  CarvingServiceOptions options_;
+  LcmBus& bus_;
+  CarvingServiceHooks hooks_;
+  CarvingStage stage_;
+  FrameSetAssembler assembler_;  // the bus thread's
+  BoundedQueue<FrameSet> queue_;
+  ServiceStatus status_{"carving"};
+  CarvingOutput output_;  // the worker's, reused
+  int64_t voxels_seq_ = 0;
+  int64_t silhouette_seq_ = 0;
+  int64_t last_silhouette_utime_ = 0;
+  std::atomic<bool> stopping_{false};
+  std::thread worker_;
+};
+
+struct CarvingServiceArgs {
+  std::filesystem::path config;        // empty: defaults (then --rig and --backgrounds are needed)
+  std::optional<std::string> lcm_url;  // overrides the config's
+  std::filesystem::path rig;           // override the config's
+  std::filesystem::path backgrounds;
+  double duration_s = 0.0;  // 0: until stopped
+};
+
+// The config with the command line's overrides, paths resolved, validated.
+// Throws InputError naming the file and key.
+CarvingServiceOptions LoadCarvingServiceOptions(const CarvingServiceArgs& args);
+
+// Loads and checks everything (config, rig, backgrounds) before opening LCM,
+// then runs until `stop` or the duration. Returns the last status. Throws
+// InputError on bad input, std::runtime_error when LCM cannot start.
+service_status_t RunCarvingService(const CarvingServiceArgs& args, const std::atomic<bool>& stop,
+                                   std::ostream& log);
+
+}  // namespace shapesense

@@ -1,0 +1,52 @@
+// shapesense-rig-sim: the virtual rig as real GigE Vision cameras (see rig_sim.h).
+#include <CLI/CLI.hpp>
+#include <csignal>
+#include <iostream>
+
+#include "libs/core/error.h"
+#include "services/rig_sim/rig_sim.h"
+
+namespace {
+
+std::atomic<bool> g_stop{false};
+shapesense::RigSimControl g_control;
+
+void OnSignal(int signal) {
+  if (signal == SIGUSR1)
+    g_control.stop_fault_camera = true;
+  else if (signal == SIGUSR2)
+    g_control.start_fault_camera = true;
+  else
+    g_stop = true;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  shapesense::RigSimArgs args;
+  CLI::App app{"shapesense-rig-sim: a simulated manipulator served as GigE Vision cameras"};
+  app.add_option("--rig", args.rig_path, "rig YAML (default: a synthetic 3-camera rig)");
+  app.add_option("--seed", args.seed, "synthetic rig and pixel noise seed");
+  app.add_option("--trajectory", args.trajectory_path, "trajectory YAML (config/rig_sim.yaml)");
+  app.add_option("--ips", args.ips, "one address per camera (default 127.0.0.1,127.0.0.2,...)")
+      ->delimiter(',');
+  app.add_option("--packet-loss", args.packet_loss, "fraction of stream packets dropped (0-1)");
+  app.add_option("--lcm-url", args.lcm_url, "LCM provider URL (default: LCM's default)");
+  app.add_option("--duration", args.duration_s, "seconds to run (default: until stopped)");
+  app.add_option("--outage", args.outages, "CAMERA:START_S:DURATION_S, a camera off the network");
+  app.add_option("--fault-camera", args.fault_camera, "camera SIGUSR1 stops, SIGUSR2 restarts");
+  app.add_flag("--backdrop-only", args.backdrop_only, "no manipulator, no truth (backgrounds)");
+  app.add_option("--write-rig", args.write_rig_path, "write the rig in use to this YAML file");
+  CLI11_PARSE(app, argc, argv);
+  for (const int signal : {SIGINT, SIGTERM, SIGUSR1, SIGUSR2}) std::signal(signal, OnSignal);
+  try {
+    shapesense::RunRigSim(args, g_stop, &g_control);
+  } catch (const shapesense::InputError& e) {
+    std::cerr << "shapesense-rig-sim: error: " << e.what() << '\n';
+    return 2;
+  } catch (const std::exception& e) {
+    std::cerr << "shapesense-rig-sim: failed: " << e.what() << '\n';
+    return 1;
+  }
+  return 0;
+}

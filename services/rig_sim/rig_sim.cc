@@ -1,0 +1,204 @@
+#include "services/rig_sim/rig_sim.h"
+
+#include <chrono>
+#include <iostream>
+#include <thread>
+
+#include "libs/camera/rig_yaml.h"
+#include "libs/core/error.h"
+#include "libs/sim/scene_generators.h"
+#include "runtime/config_file.h"
+#include "runtime/file_io.h"
+#include "runtime/lcm/channels.h"
+#include "runtime/lcm/lcm_bus.h"
+#include "runtime/lcm/service_status.h"
+#include "services/rig_sim/fake_camera_server.h"
+#include "services/rig_sim/frame_set_truth.h"
+
+namespace shapesense {
+namespace {
+
+constexpr auto kLoopPeriod = std::chrono::milliseconds(2);
+
+struct Setup {
+  Rig rig;
+  TrajectoryOptions trajectory;
+  std::vector<std::string> addresses;
+  std::vector<Outage> outages;
+  int fault_camera = 0;
+};
+
+Rig LoadRig(const RigSimArgs& args) {
+  if (!args.rig_path.empty()) return ParseRigYaml(ReadTextFile(args.rig_path), args.rig_path);
+  SyntheticRigOptions options;
+  options.seed = args.seed;
+  return MakeSyntheticRig(options);
+}
+
+int CameraIndex(const std::string& name, const Rig& rig, const std::string& what) {
+  for (size_t i = 0; i < rig.cameras.size(); ++i) {
+    if (rig.cameras[i].name == name || std::to_string(i) == name) return static_cast<int>(i);
+  }
+  throw InputError(what + ": no camera '" + name + "' in the rig");
+}
+
+std::vector<std::string> Addresses(const RigSimArgs& args, const Rig& rig) {
+  if (args.ips.empty()) {
+    std::vector<std::string> addresses;
+    for (size_t i = 0; i < rig.cameras.size(); ++i)
+      addresses.push_back("127.0.0." + std::to_string(i + 1));
+    return addresses;
+  }
+  if (args.ips.size() != rig.cameras.size()) {
+    throw InputError("--ips: expected one address per camera (" +
+                     std::to_string(rig.cameras.size()) + "), got " +
+                     std::to_string(args.ips.size()));
+  }
+  return args.ips;
+}
+
+Setup LoadSetup(const RigSimArgs& args) {
+  if (!(args.packet_loss >= 0.0 && args.packet_loss <= 1.0)) {
+    throw InputError("--packet-loss: expected a fraction 0-1, got " +
+                     std::to_string(args.packet_loss));
+  }
+  if (!(args.duration_s >= 0.0)) {
+    throw InputError("--duration: expected seconds >= 0, got " + std::to_string(args.duration_s));
+  }
+  Setup setup{LoadRig(args), LoadOptionsFile<TrajectoryOptions>(args.trajectory_path), {}, {}, 0};
+  if (const std::string error = setup.rig.Validate(); !error.empty()) {
+    throw InputError((args.rig_path.empty() ? "synthetic rig" : args.rig_path) + ": " + error);
+  }
+  setup.addresses = Addresses(args, setup.rig);
+  if (!args.write_rig_path.empty()) {
+    WriteFileAtomically(args.write_rig_path, FormatRigYaml(setup.rig));
+  }
+  for (const std::string& spec : args.outages) {
+    setup.outages.push_back(ParseOutage(spec, setup.rig));
+  }
+  setup.fault_camera = args.fault_camera.empty()
+                           ? static_cast<int>(setup.rig.cameras.size()) - 1
+                           : CameraIndex(args.fault_camera, setup.rig, "--fault-camera");
+  return setup;
+}
+
+void PublishTruth(FakeCameraServer& server, LcmBus& bus, ServiceStatus& status, int64_t* seq,
+                  bool backdrop_only) {
+  for (const FrameSet& set : server.TakeNewFrameSets()) {
+    if (backdrop_only) continue;  // nothing to measure
+    const shape_t truth =
+        FrameSetTruth(*set.scene, set.pose, set.seq, set.trigger_utime, (*seq)++, NowUtime());
+    if (bus.Publish(channels::kTruth, truth)) {
+      status.Published();
+    } else {
+      status.Error("cannot publish the truth of frame-set " + std::to_string(set.seq));
+    }
+  }
+}
+
+void SetCamera(FakeCameraServer& server, const Rig& rig, int camera, bool on,
+               const std::string& why) {
+  if (server.Running(camera) == on) return;
+  try {
+    if (on) {
+      server.Start(camera);
+    } else {
+      server.Stop(camera);
+    }
+  } catch (const std::exception& e) {  // the address may still be held: tried again next loop
+    std::cerr << e.what() << std::endl;
+    return;
+  }
+  std::cout << "rig-sim: " << rig.cameras[static_cast<size_t>(camera)].name
+            << (on ? " back on the network" : " off the network") << " (" << why << ")"
+            << std::endl;
+}
+
+// Each outage stops its camera at its start and starts it at its end.
+void ApplyOutages(FakeCameraServer& server, const Setup& setup, double t) {
+  for (const Outage& outage : setup.outages) {
+    const bool inside = t >= outage.start_s && t < outage.start_s + outage.duration_s;
+    const bool just_over =
+        t >= outage.start_s + outage.duration_s && t < outage.start_s + outage.duration_s + 0.5;
+    if (inside) SetCamera(server, setup.rig, outage.camera, false, "scheduled outage");
+    if (just_over) SetCamera(server, setup.rig, outage.camera, true, "end of the outage");
+  }
+}
+
+void ApplyControl(FakeCameraServer& server, const Setup& setup, RigSimControl* control) {
+  if (control == nullptr) return;
+  if (control->stop_fault_camera.exchange(false)) {
+    SetCamera(server, setup.rig, setup.fault_camera, false, "requested");
+  }
+  if (control->start_fault_camera.exchange(false)) {
+    SetCamera(server, setup.rig, setup.fault_camera, true, "requested");
+  }
+}
+
+// Images served count as received; images it could not make, as errors.
+void CountImages(const FakeCameraServer& server, ServiceStatus& status, int64_t* images,
+                 int64_t* errors) {
+  status.Received(server.images_served() - *images);
+  *images = server.images_served();
+  if (server.errors() > *errors) {
+    *errors = server.errors();
+    status.Error(std::to_string(*errors) + " images could not be made (unknown pixel format?)");
+  }
+}
+
+void StartCameras(FakeCameraServer& server, const Setup& setup) {
+  for (int i = 0; i < server.num_cameras(); ++i) {
+    server.Start(i);
+    std::cout << "rig-sim: " << setup.rig.cameras[static_cast<size_t>(i)].name << " serves on "
+              << setup.addresses[static_cast<size_t>(i)] << " as Aravis-Fake-" << server.serial(i)
+              << std::endl;
+  }
+  std::cout << "rig-sim: ready" << std::endl;
+}
+
+}  // namespace
+
+Outage ParseOutage(const std::string& spec, const Rig& rig) {
+  const size_t first = spec.find(':');
+  const size_t second = first == std::string::npos ? first : spec.find(':', first + 1);
+  const std::string what = "--outage '" + spec + "'";
+  if (second == std::string::npos) throw InputError(what + ": expected CAMERA:START_S:DURATION_S");
+  Outage outage;
+  outage.camera = CameraIndex(spec.substr(0, first), rig, what);
+  try {
+    outage.start_s = std::stod(spec.substr(first + 1, second - first - 1));
+    outage.duration_s = std::stod(spec.substr(second + 1));
+  } catch (const std::exception&) {
+    throw InputError(what + ": expected numbers of seconds for START_S and DURATION_S");
+  }
+  if (!(outage.start_s >= 0.0 && outage.duration_s > 0.0)) {
+    throw InputError(what + ": expected START_S >= 0 and DURATION_S > 0");
+  }
+  return outage;
+}
+
+void RunRigSim(const RigSimArgs& args, const std::atomic<bool>& stop, RigSimControl* control) {
+  const Setup setup = LoadSetup(args);
+  LcmBus bus(args.lcm_url);
+  ServiceStatus status("rig_sim");
+  const int64_t start_utime = NowUtime();
+  FakeCameraServer server(setup.rig, setup.trajectory, setup.addresses, args.seed, start_utime);
+  server.SetPacketLoss(args.packet_loss);
+  server.SetBackdropOnly(args.backdrop_only);
+  StartCameras(server, setup);
+  int64_t truth_seq = 0, images = 0, errors = 0;
+  while (!stop) {
+    const int64_t now = NowUtime();
+    const double t = static_cast<double>(now - start_utime) * 1e-6;
+    if (args.duration_s > 0.0 && t >= args.duration_s) break;
+    PublishTruth(server, bus, status, &truth_seq, args.backdrop_only);
+    ApplyOutages(server, setup, t);
+    ApplyControl(server, setup, control);
+    CountImages(server, status, &images, &errors);
+    status.MaybePublish(bus, now);
+    std::this_thread::sleep_for(kLoopPeriod);
+  }
+  PublishTruth(server, bus, status, &truth_seq, args.backdrop_only);
+}
+
+}  // namespace shapesense

@@ -1,0 +1,215 @@
+#include "services/shape/shape_service.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "runtime/lcm/channels.h"
+#include "runtime/lcm/message_convert.h"
+#include "runtime/lcm/service_config.h"
+#include "runtime/lcm/service_loop.h"
+
+namespace shapesense {
+namespace {
+
+FrameSetKey KeyOfVoxels(const voxel_cloud_t& voxels) {
+  return {voxels.trigger_seq >= 0 ? voxels.trigger_seq : -1, voxels.trigger_utime};
+}
+
+std::string NameOf(const voxel_cloud_t& voxels) {
+  return voxels.trigger_seq >= 0 ? "frame-set " + std::to_string(voxels.trigger_seq)
+                                 : "frame-set at " + std::to_string(voxels.trigger_utime) + " us";
+}
+
+}  // namespace
+
+std::string ShapeServiceOptions::Validate() const {
+  if (rig.empty()) return "rig: expected the rig file, got nothing";
+  if (shape.refine_with_silhouettes && backgrounds.empty()) {
+    return "backgrounds: expected the folder of backgrounds (needed by "
+           "shape.refine_with_silhouettes), "
+           "got nothing";
+  }
+  for (const auto& [section, error] :
+       {std::pair{"silhouette.", silhouette.Validate()}, std::pair{"shape.", shape.Validate()},
+        std::pair{"assembly.", assembly.Validate()}}) {
+    if (!error.empty()) return section + error;
+  }
+  if (!(pairing_timeout_ms >= 1 && pairing_timeout_ms <= 60000)) {
+    return "pairing_timeout_ms: expected 1-60000, got " + std::to_string(pairing_timeout_ms);
+  }
+  if (queue_capacity < 1 || queue_capacity > 100) {
+    return "queue_capacity: expected 1-100, got " + std::to_string(queue_capacity);
+  }
+  return {};
+}
+
+ShapeService::ShapeService(const ShapeServiceOptions& options, RigSetup setup, LcmBus& bus)
+    : options_(options),
+      bus_(bus),
+      stage_(setup.rig, std::move(setup.backgrounds), options.silhouette, options.shape),
+      pairing_timeout_us_(static_cast<int64_t>(std::llround(options.pairing_timeout_ms * 1e3))),
+      assembler_(CameraNames(setup.rig), options.assembly),
+      queue_(static_cast<size_t>(options.queue_capacity)) {
+  bus_.Subscribe<voxel_cloud_t>(channels::kVoxels,
+                                [this](const voxel_cloud_t& voxels, const std::string&,
+                                       int64_t receive_utime) { OnVoxels(voxels, receive_utime); });
+  if (stage_.wants_images()) {
+    bus_.Subscribe<image_t>(channels::kImagePattern,
+                            [this](const image_t& image, const std::string&,
+                                   int64_t receive_utime) { OnImage(image, receive_utime); });
+  }
+  worker_ = std::thread([this] { Work(); });
+}
+
+ShapeService::~ShapeService() {
+  stopping_ = true;
+  queue_.Close();
+  worker_.join();
+}
+
+void ShapeService::OnImage(const image_t& image, int64_t receive_utime) {
+  if (const std::string error = ValidateImageMessage(image); !error.empty()) {
+    status_.Rejected();
+    status_.Note(error);
+    return;
+  }
+  const int64_t dropped_before = assembler_.counters().DroppedSets();
+  AssemblyResult result = assembler_.Add(image, receive_utime);
+  CountAssemblyDrops(dropped_before);
+  if (result.outcome == AssemblyOutcome::kCompleted) {
+    OnFrameSet(std::move(*result.completed));
+  } else if (result.outcome != AssemblyOutcome::kPending) {
+    status_.Rejected();
+    status_.Note(image.camera + ": " + AssemblyOutcomeName(result.outcome));
+  }
+}
+
+void ShapeService::CountAssemblyDrops(int64_t before) {
+  if (assembler_.counters().DroppedSets() > before) status_.Note(assembler_.last_drop());
+}
+
+void ShapeService::OnFrameSet(FrameSet set) {
+  const FrameSetKey key = KeyOf(set);
+  const auto voxels =
+      std::find_if(waiting_voxels_.begin(), waiting_voxels_.end(),
+                   [&](const WaitingVoxels& w) { return KeyOfVoxels(w.voxels) == key; });
+  if (voxels != waiting_voxels_.end()) {
+    Enqueue({std::move(voxels->voxels), std::move(set)});
+    waiting_voxels_.erase(voxels);
+    return;
+  }
+  // Usually the images come first: the carving service is still at work on them.
+  const int64_t complete = set.complete_utime;
+  waiting_images_.push_back({std::move(set), complete});
+  while (waiting_images_.size() > 2 * static_cast<size_t>(options_.assembly.max_pending)) {
+    waiting_images_.pop_front();
+  }
+}
+
+void ShapeService::OnVoxels(const voxel_cloud_t& voxels, int64_t receive_utime) {
+  status_.Received();
+  // A full check is cheap (a few µs for a tube's thousands of voxels) and
+  // keeps a malformed cloud from waiting for images it will never use.
+  if (const std::string error = ValidateVoxelCloudMessage(voxels); !error.empty()) {
+    status_.Rejected();
+    status_.Note(NameOf(voxels) + ": " + error);
+    return;
+  }
+  if (!stage_.wants_images()) {
+    Enqueue({voxels, std::nullopt});
+    return;
+  }
+  const FrameSetKey key = KeyOfVoxels(voxels);
+  const auto images = std::find_if(waiting_images_.begin(), waiting_images_.end(),
+                                   [&](const WaitingImages& w) { return KeyOf(w.set) == key; });
+  if (images != waiting_images_.end()) {
+    Enqueue({voxels, std::move(images->set)});
+    waiting_images_.erase(images);
+    return;
+  }
+  waiting_voxels_.push_back({voxels, receive_utime});
+  if (waiting_voxels_.size() > static_cast<size_t>(options_.assembly.max_pending)) {
+    Enqueue({std::move(waiting_voxels_.front().voxels), std::nullopt});
+    waiting_voxels_.pop_front();
+  }
+}
+
+void ShapeService::Enqueue(Job job) {
+  if (!queue_.Push(std::move(job))) {
+    status_.Dropped();
+    status_.Note("overload: the oldest waiting voxel cloud was dropped");
+  }
+  status_.SetQueueDepth(static_cast<int>(queue_.Size()));
+}
+
+void ShapeService::Poll(int64_t now_utime) {
+  const int64_t dropped_before = assembler_.counters().DroppedSets();
+  assembler_.Expire(now_utime);
+  CountAssemblyDrops(dropped_before);
+  while (!waiting_voxels_.empty() &&
+         now_utime - waiting_voxels_.front().receive_utime > pairing_timeout_us_) {
+    Enqueue({std::move(waiting_voxels_.front().voxels), std::nullopt});
+    waiting_voxels_.pop_front();
+  }
+  std::erase_if(waiting_images_, [&](const WaitingImages& w) {
+    return now_utime - w.complete_utime > pairing_timeout_us_;
+  });
+  status_.SetQueueDepth(static_cast<int>(queue_.Size()));
+  status_.MaybePublish(bus_, now_utime);
+}
+
+service_status_t ShapeService::Status(int64_t now_utime) {
+  return status_.Snapshot(now_utime, bus_.Rejected());
+}
+
+void ShapeService::Work() {
+  while (!stopping_) {
+    std::optional<Job> job = queue_.Pop(std::chrono::milliseconds(100));
+    if (!job) continue;
+    status_.SetQueueDepth(static_cast<int>(queue_.Size()));
+    try {
+      MeasureAndPublish(*job);
+    } catch (const std::exception& e) {
+      status_.Error(NameOf(job->voxels) + ": " + e.what());
+    }
+  }
+}
+
+void ShapeService::MeasureAndPublish(const Job& job) {
+  const FrameSet* images = job.images ? &*job.images : nullptr;
+  if (const std::string error = stage_.Process(job.voxels, images, &output_); !error.empty()) {
+    status_.Rejected();
+    status_.Note(NameOf(job.voxels) + ": " + error);
+    return;
+  }
+  if (!output_.warning.empty()) status_.Error(NameOf(job.voxels) + ": " + output_.warning);
+  output_.message.header.seq = shape_seq_++;
+  output_.message.header.utime = NowUtime();
+  if (!bus_.Publish(channels::kShape, output_.message)) {
+    status_.Error("could not publish on " + std::string(channels::kShape));
+    return;
+  }
+  status_.Published();
+  if (!output_.estimate.valid) status_.Note(NameOf(job.voxels) + ": " + output_.estimate.error);
+}
+
+ShapeServiceOptions LoadShapeServiceOptions(const ShapeServiceArgs& args) {
+  return LoadServiceOptions<ShapeServiceOptions>(args.config,
+                                                 {args.rig, args.backgrounds, args.lcm_url});
+}
+
+service_status_t RunShapeService(const ShapeServiceArgs& args, const std::atomic<bool>& stop,
+                                 std::ostream& log) {
+  const ShapeServiceOptions options = LoadShapeServiceOptions(args);
+  const std::string backgrounds = options.shape.refine_with_silhouettes ? options.backgrounds : "";
+  RigSetup setup = LoadRigSetup(options.rig, backgrounds);
+  LcmBus bus(options.lcm_url);
+  ShapeService service(options, std::move(setup), bus);
+  log << "shapesense-shape: running on "
+      << (options.lcm_url.empty() ? "LCM's default" : options.lcm_url)
+      << (options.shape.refine_with_silhouettes ? ", refining against the silhouettes\n" : "\n");
+  RunBusLoop(bus, stop, args.duration_s, [&](int64_t now) { service.Poll(now); });
+  return service.Status(NowUtime());
+}
+
+}  // namespace shapesense

@@ -1,0 +1,138 @@
+#pragma once
+
+// shapesense-shape: voxel cloud (+ the frame-set's images) → shape, over LCM.
+//
+// The shape is refined against the silhouettes' sub-pixel edges, so this
+// service needs the images too. It subscribes to the cameras as the carving
+// service does, assembles the same frame-sets (FrameSetAssembler) and
+// extracts their silhouettes again (about 0.1 ms per 640×480 image), then
+// pairs each voxel cloud with its frame-set by trigger sequence and time.
+// The alternative, the carving service sending edge data, would save that
+// work but tie the two services to one more message format; the images are
+// multicast to every subscriber anyway, so the network carries them once.
+#include <atomic>
+#include <deque>
+#include <filesystem>
+#include <optional>
+#include <ostream>
+#include <string>
+#include <thread>
+
+#include "libs/centerline/shape_estimator.h"
+#include "libs/silhouette/silhouette.h"
+#include "runtime/lcm/bounded_queue.h"
+#include "runtime/lcm/frame_set_assembler.h"
+#include "runtime/lcm/lcm_bus.h"
+#include "runtime/lcm/pipeline_stages.h"
+#include "runtime/lcm/service_status.h"
+
+namespace shapesense {
+
+// config/shape_service.yaml documents every key.
+struct ShapeServiceOptions {
+  // Rig file and the folder of backgrounds (<camera>.png); relative paths are
+  // relative to the config file's folder. Backgrounds are needed only for
+  // the refinement against the silhouettes (shape.refine_with_silhouettes).
+  std::string rig;
+  std::string backgrounds;
+  // For the refinement; keep it equal to the carving service's.
+  SilhouetteOptions silhouette;
+  ShapeOptions shape;
+  FrameSetAssemblyOptions assembly;
+  // How long a voxel cloud waits for its frame-set before it is measured
+  // without refinement, and a frame-set for its voxel cloud, ms.
+  double pairing_timeout_ms = 500.0;
+  // Voxel clouds waiting for the worker; on overload the oldest is dropped.
+  int queue_capacity = 2;
+  std::string lcm_url;
+
+  template <class Visitor>
+  void VisitFields(Visitor&& visit) {
+    visit("rig", rig, "rig file (OpenCV YAML), relative to this file");
+    visit("backgrounds", backgrounds,
+          "folder of <camera>.png backgrounds, relative to this file (for the refinement)");
+    visit("silhouette", silhouette,
+          "silhouette extraction for the refinement (as the carving service's)");
+    visit("shape", shape, "centreline and markers");
+    visit("assembly", assembly, "frame-set assembly");
+    visit("pairing_timeout_ms", pairing_timeout_ms,
+          "wait of a voxel cloud for its images and of images for their cloud, ms (1-60000)");
+    visit("queue_capacity", queue_capacity, "voxel clouds waiting for the worker (1-100)");
+    visit("lcm_url", lcm_url, "LCM provider URL (empty: LCM_DEFAULT_URL or LCM's default)");
+  }
+  std::string Validate() const;
+};
+
+// The service on a bus that someone else handles (RunShapeService, or a test
+// running several services on one memq:// bus).
+// LcmBus cannot unsubscribe: the bus must outlive the service and must not
+// be handled once the service is gone.
+class ShapeService {
+ public:
+  // Subscribes to the voxels (and, when refining, the cameras) and starts
+  // the worker. Throws InputError on backgrounds that do not fit the rig.
+  ShapeService(const ShapeServiceOptions& options, RigSetup setup, LcmBus& bus);
+  ~ShapeService();
+  ShapeService(const ShapeService&) = delete;
+  ShapeService& operator=(const ShapeService&) = delete;
+
+  // Measures voxel clouds whose images did not come in time, forgets old
+  // frame-sets, publishes the status when due. Call from the bus's thread.
+  void Poll(int64_t now_utime);
+  service_status_t Status(int64_t now_utime);
+
+ private:
+  struct Job {
+    voxel_cloud_t voxels;
+    std::optional<FrameSet> images;
+  };
+  struct WaitingVoxels {
+    voxel_cloud_t voxels;
+    int64_t receive_utime = 0;
+  };
+  struct WaitingImages {
+    FrameSet set;
+    int64_t complete_utime = 0;
+  };
+
+  void OnImage(const image_t& image, int64_t receive_utime);
+  void OnVoxels(const voxel_cloud_t& voxels, int64_t receive_utime);
+  void OnFrameSet(FrameSet set);
+  void Enqueue(Job job);
+  void CountAssemblyDrops(int64_t before);
+  void Work();
+  void MeasureAndPublish(const Job& job);
+
+  ShapeServiceOptions options_;
+  LcmBus& bus_;
+  ShapeStage stage_;
+  int64_t pairing_timeout_us_;
+  // The bus thread's: assembly and pairing.
+  FrameSetAssembler assembler_;
+  std::deque<WaitingImages> waiting_images_;
+  std::deque<WaitingVoxels> waiting_voxels_;
+  BoundedQueue<Job> queue_;
+  ServiceStatus status_{"shape"};
+  ShapeOutput output_;  // the worker's, reused
+  int64_t shape_seq_ = 0;
+  std::atomic<bool> stopping_{false};
+  std::thread worker_;
+};
+
+struct ShapeServiceArgs {
+  std::filesystem::path config;
+  std::optional<std::string> lcm_url;
+  std::filesystem::path rig;
+  std::filesystem::path backgrounds;
+  double duration_s = 0.0;
+};
+
+ShapeServiceOptions LoadShapeServiceOptions(const ShapeServiceArgs& args);
+
+// Loads and checks everything before opening LCM, then runs until `stop` or
+// the duration. Returns the last status. Throws InputError on bad input,
+// std::runtime_error when LCM cannot start.
+service_status_t RunShapeService(const ShapeServiceArgs& args, const std::atomic<bool>& stop,
+                                 std::ostream& log);
+
+}  // namespace shapesense

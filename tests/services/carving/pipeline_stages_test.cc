@@ -1,0 +1,69 @@
+// The two stages the services and replay share, on rendered frame-sets with
+// exact ground truth: voxel cloud and shape with every stage time, and a
+// centreline within 1 mm RMS of the truth.
+#include "runtime/lcm/pipeline_stages.h"
+
+#include <gtest/gtest.h>
+
+#include <cstdio>
+
+#include "libs/core/error.h"
+#include "libs/sim/tube_scene.h"
+#include "runtime/lcm/message_convert.h"
+#include "tests/services/carving/pipeline_test_support.h"
+
+namespace shapesense {
+namespace {
+
+using testing::TestRig;
+
+FrameSet AssembledSet(const TestRig& test_rig, int scene, int64_t seq, int8_t format) {
+  FrameSetAssembler assembler(CameraNames(test_rig.rig()), FrameSetAssemblyOptions{});
+  const int64_t now = NowUtime();
+  for (image_t& image : test_rig.Messages(scene, seq, now, format)) {
+    AssemblyResult result = assembler.Add(std::move(image), now + 100);
+    if (result.completed) return *result.completed;
+  }
+  ADD_FAILURE() << "the set did not complete";
+  return {};
+}
+
+class PipelineStagesTest : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() { rig_ = new TestRig(1); }
+  static void TearDownTestSuite() { delete rig_; }
+  static TestRig* rig_;
+};
+TestRig* PipelineStagesTest::rig_ = nullptr;
+
+TEST_F(PipelineStagesTest, CarvesAndMeasuresWithinAMillimetreWithEveryStageTime) {
+  const CarvingServiceOptions carving_options = testing::TestCarvingOptions();
+  const ShapeServiceOptions shape_options = testing::TestShapeOptions();
+  const CarvingStage carving(rig_->rig(), rig_->backgrounds(), carving_options.silhouette,
+                             carving_options.carving);
+  const ShapeStage shape(rig_->rig(), rig_->backgrounds(), shape_options.silhouette,
+                         shape_options.shape);
+  CarvingOutput carved;
+  ShapeOutput shaped;
+  for (int i = 0; i < 3; ++i) {
+    const FrameSet set = AssembledSet(*rig_, i, 100 + i, image_t::PIXEL_BGR8);
+    ASSERT_EQ(carving.Process(set, &carved), "");
+    EXPECT_EQ(carved.message.trigger_seq, 100 + i);
+    EXPECT_EQ(carved.message.trigger_utime, set.trigger_utime);
+    EXPECT_GT(carved.message.num_voxels, 100);
+    ASSERT_EQ(shape.Process(carved.message, &set, &shaped), "");
+    EXPECT_EQ(shaped.warning, "");
+    ASSERT_TRUE(shaped.estimate.valid) << shaped.estimate.error;
+    const GroundTruth truth = TruthOf(rig_->Scene(i));
+    const double rms = testing::TwoWayRms(shaped.estimate.centerline, truth.centerline);
+    std::printf("scene %d: %d voxels, centreline RMS %.3f mm\n", i, carved.message.num_voxels, rms);
+    EXPECT_LT(rms, 1.0);
+    for (const char* stage : {"capture", "transport", "silhouette", "carving", "shape"}) {
+      EXPECT_NE(FindStageTime(shaped.message.stage_times, stage), nullptr) << stage;
+    }
+    EXPECT_EQ(shaped.message.num_stage_times, 5);
+  }
+}
+
+}  // namespace
+}  // namespace shapesense

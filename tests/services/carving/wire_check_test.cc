@@ -1,0 +1,143 @@
+// The look at raw buffers before lcm-gen's decoders: every honest encoding
+// passes; a truncated one, one with trailing bytes, and any corrupted count
+// that does not fit the buffer are refused, so a decoder never sizes an
+// array from a count larger than the buffer (which could ask for ~100 GB).
+#include "runtime/lcm/wire_check.h"
+
+#include <gtest/gtest.h>
+
+#include <random>
+
+#include "runtime/lcm/message_convert.h"
+#include "shapesense/service_status_t.hpp"
+#include "tests/services/carving/pipeline_test_support.h"
+
+namespace shapesense {
+namespace {
+
+using testing::Encode;
+
+std::vector<stage_time_t> RandomStages(std::mt19937& rng) {
+  std::vector<stage_time_t> stages;
+  for (unsigned i = rng() % 4; i > 0; --i) {
+    stages.push_back(MakeStageTime(std::string(1 + rng() % 12, 'a'), rng() % 1000, rng()));
+  }
+  return stages;
+}
+
+image_t RandomImage(std::mt19937& rng) {
+  cv::Mat pixels(1 + static_cast<int>(rng() % 9), 1 + static_cast<int>(rng() % 9), CV_8UC3,
+                 cv::Scalar(static_cast<double>(rng() % 256), 7, 9));
+  image_t image = ImageToMessage(pixels, image_t::PIXEL_BGR8);
+  image.camera = std::string(rng() % 6, 'c');
+  image.stage_times = RandomStages(rng);
+  image.num_stage_times = static_cast<int32_t>(image.stage_times.size());
+  return image;
+}
+
+voxel_cloud_t RandomVoxels(std::mt19937& rng) {
+  voxel_cloud_t voxels{};
+  voxels.num_voxels = static_cast<int32_t>(rng() % 20);
+  voxels.voxels.assign(static_cast<size_t>(voxels.num_voxels), 3);
+  voxels.labels.assign(static_cast<size_t>(voxels.num_voxels), 1);
+  voxels.stage_times = RandomStages(rng);
+  voxels.num_stage_times = static_cast<int32_t>(voxels.stage_times.size());
+  return voxels;
+}
+
+shape_t RandomShape(std::mt19937& rng) {
+  ShapeEstimate estimate;
+  estimate.error = std::string(rng() % 8, 'e');
+  for (unsigned i = rng() % 10; i > 0; --i) estimate.centerline.push_back(Vec3(1, 2, 3));
+  for (unsigned i = rng() % 3; i > 0; --i) estimate.markers.push_back(Vec3(4, 5, 6));
+  shape_t shape = ShapeToMessage(estimate);
+  shape.stage_times = RandomStages(rng);
+  shape.num_stage_times = static_cast<int32_t>(shape.stage_times.size());
+  return shape;
+}
+
+// Every honest encoding passes and decodes; cutting or extending it fails;
+// random corruption never makes a decode throw, and a buffer the check
+// passes decodes into arrays no larger than the buffer.
+template <class Message, class Make, class Largest>
+void CheckType(Make make, Largest largest) {
+  std::mt19937 rng(11);
+  for (int trial = 0; trial < 40; ++trial) {
+    std::vector<uint8_t> bytes = Encode(make(rng));
+    Message decoded;
+    EXPECT_TRUE(WireCheck<Message>::Plausible(bytes.data(), bytes.size()));
+    EXPECT_EQ(DecodeMessage(bytes.data(), bytes.size(), &decoded), "");
+    for (size_t cut : {size_t{1}, size_t{4}, bytes.size() / 2}) {
+      if (cut >= bytes.size()) continue;
+      EXPECT_FALSE(WireCheck<Message>::Plausible(bytes.data(), bytes.size() - cut));
+      EXPECT_NE(DecodeMessage(bytes.data(), bytes.size() - cut, &decoded), "");
+    }
+    bytes.push_back(0);
+    EXPECT_FALSE(WireCheck<Message>::Plausible(bytes.data(), bytes.size()));
+    bytes.pop_back();
+    for (int corruption = 0; corruption < 50; ++corruption) {
+      std::vector<uint8_t> broken = bytes;
+      for (int flips = 1 + static_cast<int>(rng() % 4); flips > 0; --flips) {
+        broken[8 + rng() % (broken.size() - 8)] = static_cast<uint8_t>(rng() % 2 ? 0xFF : rng());
+      }
+      Message out;
+      if (DecodeMessage(broken.data(), broken.size(), &out).empty()) {
+        EXPECT_LE(largest(out), broken.size());
+      }
+    }
+  }
+}
+
+TEST(WireCheckTest, ImageMessages) {
+  CheckType<image_t>(
+      RandomImage, [](const image_t& m) { return std::max(m.data.size(), m.stage_times.size()); });
+}
+
+TEST(WireCheckTest, VoxelCloudMessages) {
+  CheckType<voxel_cloud_t>(RandomVoxels, [](const voxel_cloud_t& m) {
+    return std::max(m.voxels.size(), m.stage_times.size());
+  });
+}
+
+TEST(WireCheckTest, ShapeMessages) {
+  CheckType<shape_t>(RandomShape, [](const shape_t& m) {
+    return std::max({m.centerline.size(), m.markers.size(), m.stage_times.size()});
+  });
+}
+
+TEST(WireCheckTest, AHugeCountIsRefusedBeforeAnyAllocation) {
+  std::mt19937 rng(12);
+  image_t image = RandomImage(rng);
+  image.stage_times.clear();
+  image.num_stage_times = 0;
+  std::vector<uint8_t> bytes = Encode(image);
+  // num_stage_times sits 4 bytes before the pixel count, which precedes the pixels.
+  const size_t stage_count = bytes.size() - image.data.size() - 8;
+  for (const uint32_t count : {0x7FFFFFFFu, 0x10000000u, 0xFFFFFFFFu}) {
+    for (int b = 0; b < 4; ++b)
+      bytes[stage_count + static_cast<size_t>(b)] = static_cast<uint8_t>(count >> (24 - 8 * b));
+    image_t out;
+    const std::string reason = DecodeMessage(bytes.data(), bytes.size(), &out);
+    EXPECT_NE(reason.find("not a valid image_t"), std::string::npos) << reason;
+  }
+}
+
+TEST(WireCheckTest, WrongTypesAndGarbageAreRefused) {
+  image_t image;
+  const std::vector<uint8_t> voxels = Encode(voxel_cloud_t{});
+  EXPECT_NE(DecodeMessage(voxels.data(), voxels.size(), &image).find("wrong type"),
+            std::string::npos);
+  const std::vector<uint8_t> garbage(100, 0xAB);
+  EXPECT_NE(DecodeMessage(garbage.data(), garbage.size(), &image), "");
+  EXPECT_NE(DecodeMessage(garbage.data(), 3, &image), "");
+  // A type without arrays needs no walker; its decoder still never throws out.
+  service_status_t status{};
+  status.service = "carving";
+  std::vector<uint8_t> bytes = Encode(status);
+  EXPECT_EQ(DecodeMessage(bytes.data(), bytes.size(), &status), "");
+  bytes[8 + 16] = 0xFF;  // the service name's length: negative
+  EXPECT_NE(DecodeMessage(bytes.data(), bytes.size(), &status), "");
+}
+
+}  // namespace
+}  // namespace shapesense
