@@ -20,10 +20,12 @@ function(shapesense_library name)
   target_link_libraries(${name} PUBLIC ${ARG_DEPS} PRIVATE shapesense_warnings ${ARG_PRIVATE_DEPS})
 endfunction()
 
-# shapesense_executable(NAME SOURCES ... DEPS ...)
+# shapesense_executable(NAME SOURCES ... DEPS ...): every program lands in
+# <build>/bin, so a launcher (the demo) finds the services beside itself.
 function(shapesense_executable name)
   cmake_parse_arguments(ARG "" "" "SOURCES;DEPS" ${ARGN})
   add_executable(${name} ${ARG_SOURCES})
+  set_target_properties(${name} PROPERTIES RUNTIME_OUTPUT_DIRECTORY ${PROJECT_BINARY_DIR}/bin)
   target_link_libraries(${name} PRIVATE shapesense_warnings ${ARG_DEPS})
 endfunction()
 

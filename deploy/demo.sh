@@ -6,4 +6,4 @@ ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 OUT="${1:-$ROOT/demo-output}"
 bash "$ROOT/deploy/install-deps.sh"
 bash "$ROOT/deploy/build.sh" release
-"$ROOT/build/clients/tools/shapesense" demo --out "$OUT"
+"$ROOT/build/bin/shapesense" demo --out "$OUT"

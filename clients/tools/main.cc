@@ -9,6 +9,7 @@
 #include "clients/tools/estimate/estimate_command.h"
 #include "clients/tools/monitor/monitor_command.h"
 #include "clients/tools/offline_command.h"
+#include "clients/tools/replay/replay_command.h"
 #include "libs/core/error.h"
 
 int main(int argc, char** argv) {
@@ -20,6 +21,7 @@ int main(int argc, char** argv) {
   shapesense::AddCalibrateCommand(app);
   shapesense::AddEstimateCommand(app);
   shapesense::AddMonitorCommand(app);
+  shapesense::AddReplayCommand(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -310,12 +310,12 @@ TEST(CalibrateCommandTest, ACameraThatNeverSeesTheBoardStopsExtrinsics) {
   EXPECT_FALSE(fs::exists(out));
 }
 
-// The dev executable exits non-zero with the message on stderr.
-TEST(CalibrateCommandTest, DevExecutableExitsNonZeroOnBadInput) {
+// `shapesense calibrate` exits non-zero with the message on stderr.
+TEST(CalibrateCommandTest, TheExecutableExitsNonZeroOnBadInput) {
   TempDir dir;
   WriteImage(dir.path / "no_board" / "v0.png", cv::Mat(480, 640, CV_8UC3, cv::Scalar(90, 90, 90)));
   const fs::path out = dir.path / "cam.yaml";
-  const std::string command = std::string(SHAPESENSE_CALIBRATE_DEV) +
+  const std::string command = std::string(SHAPESENSE_BINARY) +
                               " calibrate intrinsics --images " + (dir.path / "no_board").string() +
                               " --cols 9 --rows 6 --square 25 --out " + out.string() + " 2> " +
                               (dir.path / "stderr.txt").string();

@@ -11,9 +11,10 @@
 #include <thread>
 #include <vector>
 
+#include "runtime/process/private_network.h"
 #include "services/capture/aravis_camera.h"
 #include "tests/services/aravis/fake_gige_camera.h"
-#include "tests/services/aravis/private_network.h"
+#include "tests/support/network_test.h"
 
 namespace shapesense {
 namespace {
@@ -39,9 +40,8 @@ class AravisCameraTest : public ::testing::Test {
 
   // A fake camera on 127.0.0.<2 + index>, or a failed test.
   std::unique_ptr<FakeGigeCamera> Serve(int index, const std::string& serial) {
-    auto camera = std::make_unique<FakeGigeCamera>(nettest::LoopbackAddress(1 + index), serial);
-    EXPECT_TRUE(camera->running())
-        << "the fake camera cannot bind " << nettest::LoopbackAddress(1 + index);
+    auto camera = std::make_unique<FakeGigeCamera>(LoopbackAddress(1 + index), serial);
+    EXPECT_TRUE(camera->running()) << "the fake camera cannot bind " << LoopbackAddress(1 + index);
     return camera;
   }
 
@@ -76,7 +76,7 @@ TEST_F(AravisCameraTest, EveryPixelFormatDecodesToWhatTheCameraSent) {
   int64_t frames_before = 0;
   for (const std::string format :
        {"RGB8", "Mono8", "BayerRG8", "BayerGR8", "BayerGB8", "BayerBG8"}) {
-    const auto camera = MakeAravisCamera(Config(nettest::LoopbackAddress(1), format));
+    const auto camera = MakeAravisCamera(Config(LoopbackAddress(1), format));
     ASSERT_NO_THROW(camera->Open()) << format;
     const std::optional<CameraFrame> frame = TriggerAndGrab(*camera, 0);
     ASSERT_TRUE(frame.has_value()) << format;
@@ -94,7 +94,7 @@ TEST_F(AravisCameraTest, EveryPixelFormatDecodesToWhatTheCameraSent) {
 
 TEST_F(AravisCameraTest, AppliesSizeExposureAndTriggerSettings) {
   const auto fake = Serve(0, "CFG0");
-  CameraConfig config = Config(nettest::LoopbackAddress(1));
+  CameraConfig config = Config(LoopbackAddress(1));
   config.width = 320;
   config.height = 200;
   config.exposure_us = 2500.0;
@@ -115,7 +115,7 @@ TEST_F(AravisCameraTest, AppliesSizeExposureAndTriggerSettings) {
 // One frame per trigger, carrying that trigger's seq and time; nothing else.
 TEST_F(AravisCameraTest, SoftwareTriggerGivesExactlyOneFramePerTrigger) {
   const auto fake = Serve(0, "TRG0");
-  const auto camera = MakeAravisCamera(Config(nettest::LoopbackAddress(1)));
+  const auto camera = MakeAravisCamera(Config(LoopbackAddress(1)));
   ASSERT_NO_THROW(camera->Open());
   for (int64_t seq = 0; seq < 20; ++seq) {
     const std::optional<CameraFrame> frame = TriggerAndGrab(*camera, seq);
@@ -137,7 +137,7 @@ TEST_F(AravisCameraTest, SoftwareTriggerGivesExactlyOneFramePerTrigger) {
 // trigger the camera answered (the newest one sent before it made the image).
 TEST_F(AravisCameraTest, FramesOfATriggerStreamCarryTheirOwnTriggers) {
   const auto fake = Serve(0, "STR0");
-  const auto camera = MakeAravisCamera(Config(nettest::LoopbackAddress(1)));
+  const auto camera = MakeAravisCamera(Config(LoopbackAddress(1)));
   ASSERT_NO_THROW(camera->Open());
   ASSERT_TRUE(TriggerAndGrab(*camera, 0).has_value());  // the fake serves its first trigger late
   std::vector<CameraFrame> frames;
@@ -165,7 +165,7 @@ TEST_F(AravisCameraTest, FramesOfATriggerStreamCarryTheirOwnTriggers) {
 TEST_F(AravisCameraTest, PacketLossDropsIncompleteFramesAndNeverDeliversABrokenOne) {
   const auto fake = Serve(0, "LOSS0");
   fake->SetPacketLoss(0.05);
-  CameraConfig config = Config(nettest::LoopbackAddress(1), "Mono8");
+  CameraConfig config = Config(LoopbackAddress(1), "Mono8");
   config.width = 640;
   config.height = 480;
   // 21 packets a frame (leader, 19 of data, trailer): 0.95^21, 34% arrive whole.
@@ -195,7 +195,7 @@ TEST_F(AravisCameraTest, PacketLossDropsIncompleteFramesAndNeverDeliversABrokenO
 // fails while it is away and succeeds once it is back.
 TEST_F(AravisCameraTest, ALostCameraRaisesAndReconnectsWhenItReturns) {
   auto fake = Serve(0, "GONE0");
-  const CameraConfig config = Config(nettest::LoopbackAddress(1));
+  const CameraConfig config = Config(LoopbackAddress(1));
   const auto camera = MakeAravisCamera(config);
   ASSERT_NO_THROW(camera->Open());
   ASSERT_TRUE(TriggerAndGrab(*camera, 0).has_value());
@@ -226,7 +226,7 @@ TEST_F(AravisCameraTest, ALostCameraRaisesAndReconnectsWhenItReturns) {
 TEST_F(AravisCameraTest, OpensBySerialNumberAndByDeviceId) {
   const auto fake = Serve(2, "SER7");
   for (const std::string& device :
-       std::vector<std::string>{"SER7", "Aravis-Fake-SER7", nettest::LoopbackAddress(3)}) {
+       std::vector<std::string>{"SER7", "Aravis-Fake-SER7", LoopbackAddress(3)}) {
     const auto camera = MakeAravisCamera(Config(device));
     ASSERT_NO_THROW(camera->Open()) << device;
     EXPECT_TRUE(TriggerAndGrab(*camera, 0).has_value()) << device;
@@ -237,10 +237,10 @@ TEST_F(AravisCameraTest, FailuresNameTheCameraAndTheDevice) {
   const auto fake = Serve(0, "ERR0");
   const std::vector<CameraConfig> bad = [] {
     CameraConfig missing = Config("NO-SUCH-SERIAL");
-    CameraConfig line = Config(nettest::LoopbackAddress(1));
+    CameraConfig line = Config(LoopbackAddress(1));
     line.trigger = "hardware";
-    line.trigger_line = "Line7";  // the fake camera has Line0 only
-    CameraConfig format = Config(nettest::LoopbackAddress(1), "YUYV");  // not a GenICam name
+    line.trigger_line = "Line7";                               // the fake camera has Line0 only
+    CameraConfig format = Config(LoopbackAddress(1), "YUYV");  // not a GenICam name
     return std::vector<CameraConfig>{missing, line, format};
   }();
   for (const CameraConfig& config : bad) {
@@ -259,7 +259,7 @@ TEST_F(AravisCameraTest, FailuresNameTheCameraAndTheDevice) {
 
 TEST_F(AravisCameraTest, HardwareTriggerWaitsForTheLine) {
   const auto fake = Serve(0, "HW0");
-  CameraConfig config = Config(nettest::LoopbackAddress(1));
+  CameraConfig config = Config(LoopbackAddress(1));
   config.trigger = "hardware";
   config.trigger_line = "Line0";
   const auto camera = MakeAravisCamera(config);
@@ -274,7 +274,7 @@ TEST_F(AravisCameraTest, HardwareTriggerWaitsForTheLine) {
 
 TEST_F(AravisCameraTest, FreeRunStreamsAtTheFrameRateWithoutTriggers) {
   const auto fake = Serve(0, "FREE0");
-  CameraConfig config = Config(nettest::LoopbackAddress(1));
+  CameraConfig config = Config(LoopbackAddress(1));
   config.trigger = "free_run";
   config.frame_rate = 50.0;
   const auto camera = MakeAravisCamera(config);

@@ -19,11 +19,12 @@
 #include "runtime/file_io.h"
 #include "runtime/lcm/channels.h"
 #include "runtime/lcm/lcm_bus.h"
+#include "runtime/process/child_process.h"
+#include "runtime/process/private_network.h"
 #include "services/capture/aravis_camera.h"
 #include "services/rig_sim/fake_camera_server.h"
 #include "services/rig_sim/raw_image.h"
-#include "tests/services/aravis/private_network.h"
-#include "tests/services/rig_sim/child_process.h"
+#include "tests/support/network_test.h"
 
 namespace shapesense {
 namespace {
@@ -35,7 +36,7 @@ constexpr const char* kLcmUrl = "udpm://239.255.76.67:7667?ttl=0";
 CameraConfig CameraAt(int index, const std::string& pixel_format = "RGB8") {
   CameraConfig config;
   config.name = "cam" + std::to_string(index);
-  config.device = nettest::LoopbackAddress(index);
+  config.device = LoopbackAddress(index);
   config.pixel_format = pixel_format;
   return config;
 }
@@ -173,7 +174,7 @@ std::string FastTrajectoryFile() {
   return path;
 }
 
-nettest::ChildProcess StartRigSim(const std::vector<std::string>& extra) {
+ChildProcess StartRigSim(const std::vector<std::string>& extra) {
   std::vector<std::string> argv = {RIG_SIM_BINARY,
                                    "--lcm-url",
                                    kLcmUrl,
@@ -184,7 +185,7 @@ nettest::ChildProcess StartRigSim(const std::vector<std::string>& extra) {
                                    "--trajectory",
                                    FastTrajectoryFile()};
   argv.insert(argv.end(), extra.begin(), extra.end());
-  return nettest::ChildProcess(argv);
+  return ChildProcess(argv);
 }
 
 // The fraction of the truth's centreline that falls on the dark tube in an

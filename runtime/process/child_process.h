@@ -1,6 +1,6 @@
 #pragma once
 
-// A child process for multi-process tests: started with its stdout on a
+// A child process of a multi-process run (tests, bench, demo): started with its stdout on a
 // pipe, waited for by the lines it prints, and always ended (SIGTERM, then
 // SIGKILL) when the handle goes away.
 
@@ -10,7 +10,7 @@
 #include <string>
 #include <vector>
 
-namespace shapesense::nettest {
+namespace shapesense {
 
 class ChildProcess {
  public:
@@ -37,4 +37,4 @@ class ChildProcess {
   size_t scanned_ = 0;
 };
 
-}  // namespace shapesense::nettest
+}  // namespace shapesense

@@ -1,4 +1,4 @@
-#include "tests/services/aravis/private_network.h"
+#include "runtime/process/private_network.h"
 
 #include <sched.h>
 #include <unistd.h>
@@ -8,13 +8,8 @@
 #include <cstring>
 #include <fstream>
 
-namespace shapesense::nettest {
+namespace shapesense {
 namespace {
-
-std::string& ErrorSlot() {
-  static std::string error = "EnterPrivateNetwork() was not called (link private_network_main.cc)";
-  return error;
-}
 
 bool WriteProcFile(const std::string& path, const std::string& text) {
   std::ofstream file(path);
@@ -57,10 +52,7 @@ std::string EnterPrivateNetwork(int extra_addresses) {
   for (int i = 1; i <= extra_addresses && error.empty(); ++i) {
     error = Run("ip addr add " + LoopbackAddress(i) + "/8 dev lo");
   }
-  ErrorSlot() = error.empty() ? "" : "private network namespace: " + error;
-  return ErrorSlot();
+  return error.empty() ? "" : "private network namespace: " + error;
 }
 
-const std::string& PrivateNetworkError() { return ErrorSlot(); }
-
-}  // namespace shapesense::nettest
+}  // namespace shapesense

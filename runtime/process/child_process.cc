@@ -1,4 +1,4 @@
-#include "tests/services/rig_sim/child_process.h"
+#include "runtime/process/child_process.h"
 
 #include <poll.h>
 #include <signal.h>
@@ -8,7 +8,7 @@
 #include <stdexcept>
 #include <thread>
 
-namespace shapesense::nettest {
+namespace shapesense {
 
 ChildProcess::ChildProcess(const std::vector<std::string>& argv) {
   int fds[2];
@@ -76,4 +76,4 @@ int ChildProcess::Stop(std::chrono::milliseconds grace) {
   return status;
 }
 
-}  // namespace shapesense::nettest
+}  // namespace shapesense
