@@ -65,7 +65,8 @@ std::string ImageMessageToMono(const image_t& image, cv::Mat* mono);
 // std::invalid_argument on a type that does not fit the format or an
 // unsupported compression of it (a caller's bug, not network input).
 image_t ImageToMessage(const cv::Mat& pixels, int8_t pixel_format,
-                       int8_t compression = image_t::COMPRESSION_NONE, int jpeg_quality = 95);
+                       int8_t compression = image_t::COMPRESSION_NONE, int jpeg_quality = 95,
+                       int png_level = 1);
 
 // The Bayer mosaic a sensor with `bayer_format` (image_t::PIXEL_BAYER_*, named
 // by the colours of the top-left 2×2 cell read row by row, as GenICam does)

@@ -1,6 +1,6 @@
 #pragma once
 
-// Camera frames as image_t messages and back.
+// Camera frames as image_t messages (runtime/lcm/message_convert.h decodes them).
 
 #include <cstdint>
 #include <string>
@@ -22,9 +22,5 @@ ImageCompression ParseCompression(const std::string& name);
 // std::invalid_argument for an image that is not 8-bit mono or BGR.
 image_t ToImageMessage(const std::string& camera, const CameraFrame& frame, int64_t seq,
                        int64_t publish_utime, ImageCompression compression, int png_level = 1);
-
-// The image of a message (BGR8 or MONO8, raw or PNG), its own copy; an empty
-// Mat when the message is inconsistent (sizes, stride, format, data).
-cv::Mat DecodeImageMessage(const image_t& message);
 
 }  // namespace shapesense

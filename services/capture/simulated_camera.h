@@ -11,46 +11,28 @@
 // (converted to grey for Mono8; `.background` without the manipulator). In free run `seq` is the
 // camera's own frame counter and the trigger time is when the frame fell due.
 
-#include <atomic>
 #include <memory>
-#include <mutex>
 #include <optional>
 
 #include "libs/sim/tube_scene.h"
-#include "services/capture/camera_backend.h"
-#include "services/capture/free_run_clock.h"
 #include "services/capture/simulated_world.h"
-#include "services/capture/trigger_queue.h"
+#include "services/capture/software_camera.h"
 
 namespace shapesense {
 
-class SimulatedCamera : public CameraBackend {
+class SimulatedCamera : public SoftwareCamera {
  public:
   SimulatedCamera(CameraConfig config, std::shared_ptr<const SimulatedWorld> world);
 
-  const std::string& name() const override { return config_.name; }
-  // CameraError when the rig has no camera of this name.
-  void Open() override;
-  void Close() override;
-  bool IsOpen() const override { return open_; }
-  void Trigger(int64_t seq, int64_t utime) override;
-  bool Grab(std::chrono::milliseconds timeout, CameraFrame* frame) override;
-  CameraStats Stats() const override;
-
  private:
-  bool NextDue(std::chrono::milliseconds timeout, QueuedTrigger* trigger, int64_t* frame_index);
+  // CameraError when the rig has no camera of this name.
+  void OpenSource() override;
+  void CloseSource() override {}
+  cv::Mat MakeImage(int64_t index, int64_t trigger_utime) override;
 
-  const CameraConfig config_;
   const std::shared_ptr<const SimulatedWorld> world_;
-  std::atomic<bool> open_{false};
-  bool ever_opened_ = false;
   size_t camera_index_ = 0;
   std::optional<SceneRenderer> renderer_;
-  FreeRunClock clock_;
-  int64_t next_frame_ = 0;  // free run
-  TriggerQueue triggers_;
-  mutable std::mutex stats_mutex_;
-  CameraStats stats_;
 };
 
 }  // namespace shapesense

@@ -40,18 +40,14 @@ CarvingService::CarvingService(const CarvingServiceOptions& options, RigSetup se
       hooks_(std::move(hooks)),
       stage_(setup.rig, std::move(setup.backgrounds), options.silhouette, options.carving),
       assembler_(CameraNames(setup.rig), options.assembly),
-      queue_(static_cast<size_t>(options.queue_capacity)) {
+      worker_(options.queue_capacity, status_, "frame-set", FrameSetName, [this](FrameSet& set) {
+        if (hooks_.before_carving) hooks_.before_carving(set);
+        CarveAndPublish(set);
+      }) {
   bus_.Subscribe<image_t>(channels::kImagePattern,
                           [this](const image_t& image, const std::string&, int64_t receive_utime) {
                             OnImage(image, receive_utime);
                           });
-  worker_ = std::thread([this] { Work(); });
-}
-
-CarvingService::~CarvingService() {
-  stopping_ = true;
-  queue_.Close();
-  worker_.join();
 }
 
 void CarvingService::OnImage(const image_t& image, int64_t receive_utime) {
@@ -65,11 +61,7 @@ void CarvingService::OnImage(const image_t& image, int64_t receive_utime) {
   AssemblyResult result = assembler_.Add(image, receive_utime);
   CountAssemblyDrops(dropped_before);
   if (result.outcome == AssemblyOutcome::kCompleted) {
-    if (!queue_.Push(std::move(*result.completed))) {
-      status_.Dropped();
-      status_.Note("overload: the oldest waiting frame-set was dropped");
-    }
-    status_.SetQueueDepth(static_cast<int>(queue_.Size()));
+    worker_.Push(std::move(*result.completed));
   } else if (result.outcome != AssemblyOutcome::kPending) {
     status_.Rejected();
     status_.Note(image.camera + ": " + AssemblyOutcomeName(result.outcome) + " (trigger " +
@@ -89,26 +81,12 @@ void CarvingService::Poll(int64_t now_utime) {
   const int64_t dropped_before = assembler_.counters().DroppedSets();
   assembler_.Expire(now_utime);
   CountAssemblyDrops(dropped_before);
-  status_.SetQueueDepth(static_cast<int>(queue_.Size()));
+  status_.SetQueueDepth(worker_.depth());
   status_.MaybePublish(bus_, now_utime);
 }
 
 service_status_t CarvingService::Status(int64_t now_utime) {
   return status_.Snapshot(now_utime, bus_.Rejected());
-}
-
-void CarvingService::Work() {
-  while (!stopping_) {
-    std::optional<FrameSet> set = queue_.Pop(std::chrono::milliseconds(100));
-    if (!set) continue;
-    status_.SetQueueDepth(static_cast<int>(queue_.Size()));
-    if (hooks_.before_carving) hooks_.before_carving(*set);
-    try {
-      CarveAndPublish(*set);
-    } catch (const std::exception& e) {
-      status_.Error(FrameSetName(*set) + ": " + e.what());
-    }
-  }
 }
 
 void CarvingService::CarveAndPublish(const FrameSet& set) {
@@ -145,12 +123,12 @@ void CarvingService::MaybePublishSilhouettes(const FrameSet& set) {
   ++silhouette_seq_;
 }
 
-CarvingServiceOptions LoadCarvingServiceOptions(const CarvingServiceArgs& args) {
+CarvingServiceOptions LoadCarvingServiceOptions(const ServiceArgs& args) {
   return LoadServiceOptions<CarvingServiceOptions>(args.config,
                                                    {args.rig, args.backgrounds, args.lcm_url});
 }
 
-service_status_t RunCarvingService(const CarvingServiceArgs& args, const std::atomic<bool>& stop,
+service_status_t RunCarvingService(const ServiceArgs& args, const std::atomic<bool>& stop,
                                    std::ostream& log) {
   const CarvingServiceOptions options = LoadCarvingServiceOptions(args);
   RigSetup setup = LoadRigSetup(options.rig, options.backgrounds);

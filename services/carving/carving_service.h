@@ -5,21 +5,18 @@
 // blocks or throws); a bounded queue hands complete frame-sets to one
 // worker, dropping the oldest on overload.
 #include <atomic>
-#include <filesystem>
 #include <functional>
-#include <memory>
-#include <optional>
 #include <ostream>
 #include <string>
-#include <thread>
 
 #include "libs/carving/carver.h"
 #include "libs/silhouette/silhouette.h"
-#include "runtime/lcm/bounded_queue.h"
 #include "runtime/lcm/frame_set_assembler.h"
 #include "runtime/lcm/lcm_bus.h"
 #include "runtime/lcm/pipeline_stages.h"
+#include "runtime/lcm/service_main.h"
 #include "runtime/lcm/service_status.h"
+#include "runtime/lcm/service_worker.h"
 
 namespace shapesense {
 
@@ -72,7 +69,6 @@ class CarvingService {
   // backgrounds. Throws InputError on backgrounds that do not fit the rig.
   CarvingService(const CarvingServiceOptions& options, RigSetup setup, LcmBus& bus,
                  CarvingServiceHooks hooks = {});
-  ~CarvingService();
   CarvingService(const CarvingService&) = delete;
   CarvingService& operator=(const CarvingService&) = delete;
 
@@ -87,7 +83,6 @@ class CarvingService {
  private:
   void OnImage(const image_t& image, int64_t receive_utime);
   void CountAssemblyDrops(int64_t before);
-  void Work();
   void CarveAndPublish(const FrameSet& set);
   void MaybePublishSilhouettes(const FrameSet& set);
 
@@ -96,32 +91,22 @@ class CarvingService {
   CarvingServiceHooks hooks_;
   CarvingStage stage_;
   FrameSetAssembler assembler_;  // the bus thread's
-  BoundedQueue<FrameSet> queue_;
   ServiceStatus status_{"carving"};
   CarvingOutput output_;  // the worker's, reused
   int64_t voxels_seq_ = 0;
   int64_t silhouette_seq_ = 0;
   int64_t last_silhouette_utime_ = 0;
-  std::atomic<bool> stopping_{false};
-  std::thread worker_;
-};
-
-struct CarvingServiceArgs {
-  std::filesystem::path config;        // empty: defaults (then --rig and --backgrounds are needed)
-  std::optional<std::string> lcm_url;  // overrides the config's
-  std::filesystem::path rig;           // override the config's
-  std::filesystem::path backgrounds;
-  double duration_s = 0.0;  // 0: until stopped
+  ServiceWorker<FrameSet> worker_;  // last: see ServiceWorker
 };
 
 // The config with the command line's overrides, paths resolved, validated.
 // Throws InputError naming the file and key.
-CarvingServiceOptions LoadCarvingServiceOptions(const CarvingServiceArgs& args);
+CarvingServiceOptions LoadCarvingServiceOptions(const ServiceArgs& args);
 
 // Loads and checks everything (config, rig, backgrounds) before opening LCM,
 // then runs until `stop` or the duration. Returns the last status. Throws
 // InputError on bad input, std::runtime_error when LCM cannot start.
-service_status_t RunCarvingService(const CarvingServiceArgs& args, const std::atomic<bool>& stop,
+service_status_t RunCarvingService(const ServiceArgs& args, const std::atomic<bool>& stop,
                                    std::ostream& log);
 
 }  // namespace shapesense

@@ -49,7 +49,10 @@ ShapeService::ShapeService(const ShapeServiceOptions& options, RigSetup setup, L
       stage_(setup.rig, std::move(setup.backgrounds), options.silhouette, options.shape),
       pairing_timeout_us_(static_cast<int64_t>(std::llround(options.pairing_timeout_ms * 1e3))),
       assembler_(CameraNames(setup.rig), options.assembly),
-      queue_(static_cast<size_t>(options.queue_capacity)) {
+      worker_(
+          options.queue_capacity, status_, "voxel cloud",
+          [](const Job& job) { return NameOf(job.voxels); },
+          [this](Job& job) { MeasureAndPublish(job); }) {
   bus_.Subscribe<voxel_cloud_t>(channels::kVoxels,
                                 [this](const voxel_cloud_t& voxels, const std::string&,
                                        int64_t receive_utime) { OnVoxels(voxels, receive_utime); });
@@ -58,13 +61,6 @@ ShapeService::ShapeService(const ShapeServiceOptions& options, RigSetup setup, L
                             [this](const image_t& image, const std::string&,
                                    int64_t receive_utime) { OnImage(image, receive_utime); });
   }
-  worker_ = std::thread([this] { Work(); });
-}
-
-ShapeService::~ShapeService() {
-  stopping_ = true;
-  queue_.Close();
-  worker_.join();
 }
 
 void ShapeService::OnImage(const image_t& image, int64_t receive_utime) {
@@ -94,7 +90,7 @@ void ShapeService::OnFrameSet(FrameSet set) {
       std::find_if(waiting_voxels_.begin(), waiting_voxels_.end(),
                    [&](const WaitingVoxels& w) { return KeyOfVoxels(w.voxels) == key; });
   if (voxels != waiting_voxels_.end()) {
-    Enqueue({std::move(voxels->voxels), std::move(set)});
+    worker_.Push({std::move(voxels->voxels), std::move(set)});
     waiting_voxels_.erase(voxels);
     return;
   }
@@ -116,30 +112,22 @@ void ShapeService::OnVoxels(const voxel_cloud_t& voxels, int64_t receive_utime) 
     return;
   }
   if (!stage_.wants_images()) {
-    Enqueue({voxels, std::nullopt});
+    worker_.Push({voxels, std::nullopt});
     return;
   }
   const FrameSetKey key = KeyOfVoxels(voxels);
   const auto images = std::find_if(waiting_images_.begin(), waiting_images_.end(),
                                    [&](const WaitingImages& w) { return KeyOf(w.set) == key; });
   if (images != waiting_images_.end()) {
-    Enqueue({voxels, std::move(images->set)});
+    worker_.Push({voxels, std::move(images->set)});
     waiting_images_.erase(images);
     return;
   }
   waiting_voxels_.push_back({voxels, receive_utime});
   if (waiting_voxels_.size() > static_cast<size_t>(options_.assembly.max_pending)) {
-    Enqueue({std::move(waiting_voxels_.front().voxels), std::nullopt});
+    worker_.Push({std::move(waiting_voxels_.front().voxels), std::nullopt});
     waiting_voxels_.pop_front();
   }
-}
-
-void ShapeService::Enqueue(Job job) {
-  if (!queue_.Push(std::move(job))) {
-    status_.Dropped();
-    status_.Note("overload: the oldest waiting voxel cloud was dropped");
-  }
-  status_.SetQueueDepth(static_cast<int>(queue_.Size()));
 }
 
 void ShapeService::Poll(int64_t now_utime) {
@@ -148,31 +136,18 @@ void ShapeService::Poll(int64_t now_utime) {
   CountAssemblyDrops(dropped_before);
   while (!waiting_voxels_.empty() &&
          now_utime - waiting_voxels_.front().receive_utime > pairing_timeout_us_) {
-    Enqueue({std::move(waiting_voxels_.front().voxels), std::nullopt});
+    worker_.Push({std::move(waiting_voxels_.front().voxels), std::nullopt});
     waiting_voxels_.pop_front();
   }
   std::erase_if(waiting_images_, [&](const WaitingImages& w) {
     return now_utime - w.complete_utime > pairing_timeout_us_;
   });
-  status_.SetQueueDepth(static_cast<int>(queue_.Size()));
+  status_.SetQueueDepth(worker_.depth());
   status_.MaybePublish(bus_, now_utime);
 }
 
 service_status_t ShapeService::Status(int64_t now_utime) {
   return status_.Snapshot(now_utime, bus_.Rejected());
-}
-
-void ShapeService::Work() {
-  while (!stopping_) {
-    std::optional<Job> job = queue_.Pop(std::chrono::milliseconds(100));
-    if (!job) continue;
-    status_.SetQueueDepth(static_cast<int>(queue_.Size()));
-    try {
-      MeasureAndPublish(*job);
-    } catch (const std::exception& e) {
-      status_.Error(NameOf(job->voxels) + ": " + e.what());
-    }
-  }
 }
 
 void ShapeService::MeasureAndPublish(const Job& job) {
@@ -193,12 +168,12 @@ void ShapeService::MeasureAndPublish(const Job& job) {
   if (!output_.estimate.valid) status_.Note(NameOf(job.voxels) + ": " + output_.estimate.error);
 }
 
-ShapeServiceOptions LoadShapeServiceOptions(const ShapeServiceArgs& args) {
+ShapeServiceOptions LoadShapeServiceOptions(const ServiceArgs& args) {
   return LoadServiceOptions<ShapeServiceOptions>(args.config,
                                                  {args.rig, args.backgrounds, args.lcm_url});
 }
 
-service_status_t RunShapeService(const ShapeServiceArgs& args, const std::atomic<bool>& stop,
+service_status_t RunShapeService(const ServiceArgs& args, const std::atomic<bool>& stop,
                                  std::ostream& log) {
   const ShapeServiceOptions options = LoadShapeServiceOptions(args);
   const std::string backgrounds = options.shape.refine_with_silhouettes ? options.backgrounds : "";

@@ -12,19 +12,18 @@
 // multicast to every subscriber anyway, so the network carries them once.
 #include <atomic>
 #include <deque>
-#include <filesystem>
 #include <optional>
 #include <ostream>
 #include <string>
-#include <thread>
 
 #include "libs/centerline/shape_estimator.h"
 #include "libs/silhouette/silhouette.h"
-#include "runtime/lcm/bounded_queue.h"
 #include "runtime/lcm/frame_set_assembler.h"
 #include "runtime/lcm/lcm_bus.h"
 #include "runtime/lcm/pipeline_stages.h"
+#include "runtime/lcm/service_main.h"
 #include "runtime/lcm/service_status.h"
+#include "runtime/lcm/service_worker.h"
 
 namespace shapesense {
 
@@ -72,7 +71,6 @@ class ShapeService {
   // Subscribes to the voxels (and, when refining, the cameras) and starts
   // the worker. Throws InputError on backgrounds that do not fit the rig.
   ShapeService(const ShapeServiceOptions& options, RigSetup setup, LcmBus& bus);
-  ~ShapeService();
   ShapeService(const ShapeService&) = delete;
   ShapeService& operator=(const ShapeService&) = delete;
 
@@ -98,9 +96,7 @@ class ShapeService {
   void OnImage(const image_t& image, int64_t receive_utime);
   void OnVoxels(const voxel_cloud_t& voxels, int64_t receive_utime);
   void OnFrameSet(FrameSet set);
-  void Enqueue(Job job);
   void CountAssemblyDrops(int64_t before);
-  void Work();
   void MeasureAndPublish(const Job& job);
 
   ShapeServiceOptions options_;
@@ -111,28 +107,18 @@ class ShapeService {
   FrameSetAssembler assembler_;
   std::deque<WaitingImages> waiting_images_;
   std::deque<WaitingVoxels> waiting_voxels_;
-  BoundedQueue<Job> queue_;
   ServiceStatus status_{"shape"};
   ShapeOutput output_;  // the worker's, reused
   int64_t shape_seq_ = 0;
-  std::atomic<bool> stopping_{false};
-  std::thread worker_;
+  ServiceWorker<Job> worker_;  // last: see ServiceWorker
 };
 
-struct ShapeServiceArgs {
-  std::filesystem::path config;
-  std::optional<std::string> lcm_url;
-  std::filesystem::path rig;
-  std::filesystem::path backgrounds;
-  double duration_s = 0.0;
-};
-
-ShapeServiceOptions LoadShapeServiceOptions(const ShapeServiceArgs& args);
+ShapeServiceOptions LoadShapeServiceOptions(const ServiceArgs& args);
 
 // Loads and checks everything before opening LCM, then runs until `stop` or
 // the duration. Returns the last status. Throws InputError on bad input,
 // std::runtime_error when LCM cannot start.
-service_status_t RunShapeService(const ShapeServiceArgs& args, const std::atomic<bool>& stop,
+service_status_t RunShapeService(const ServiceArgs& args, const std::atomic<bool>& stop,
                                  std::ostream& log);
 
 }  // namespace shapesense

@@ -67,9 +67,9 @@ class ReplayTest : public ::testing::Test {
   // The live pipeline over memq:// on `sets` rendered frame-sets, its images
   // recorded as lcm-logger would; returns the shapes by trigger sequence.
   std::map<int64_t, shape_t> RunLive(int sets) {
-    CarvingServiceArgs carving_args;
+    ServiceArgs carving_args;
     carving_args.config = dir_ / "carving.yaml";
-    ShapeServiceArgs shape_args;
+    ServiceArgs shape_args;
     shape_args.config = dir_ / "shape.yaml";
     const CarvingServiceOptions carving = LoadCarvingServiceOptions(carving_args);
     const ShapeServiceOptions shape = LoadShapeServiceOptions(shape_args);

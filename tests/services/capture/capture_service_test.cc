@@ -141,7 +141,7 @@ TEST(CaptureServiceTest, SimulatedCamerasPublishFrameSetsWithOneTriggerSequence)
       EXPECT_EQ(image.stage_times[0].stage, "capture");
       EXPECT_EQ(image.stage_times[0].duration_us, image.host_utime - image.trigger_utime);
       EXPECT_GE(image.stage_times[0].duration_us, 0);
-      EXPECT_FALSE(DecodeImageMessage(image).empty());
+      EXPECT_FALSE(testing::DecodedImage(image).empty());
     }
     EXPECT_EQ(summary.cameras.at(name).published, static_cast<int64_t>(images.size()));
     EXPECT_EQ(summary.cameras.at(name).outages, 0);
@@ -179,7 +179,7 @@ TEST(CaptureServiceTest, ReplayedImagesArrivePixelExactAsPng) {
     for (const image_t& image : images) {
       EXPECT_EQ(image.compression, static_cast<int>(image_t::COMPRESSION_PNG));
       EXPECT_EQ(image.row_stride, 0);
-      EXPECT_TRUE(SameImage(DecodeImageMessage(image), frames[image.trigger_seq % 4][camera]))
+      EXPECT_TRUE(SameImage(testing::DecodedImage(image), frames[image.trigger_seq % 4][camera]))
           << "cam" << camera << " seq " << image.trigger_seq;
     }
   }
@@ -216,7 +216,7 @@ TEST(CaptureServiceTest, ACameraThatFailsToOpenIsRetriedWhileTheOthersRun) {
   for (size_t i = 0; i < cam0.size(); ++i)
     ASSERT_EQ(cam0[i], static_cast<int64_t>(i)) << "cam0 never stopped";
   for (const image_t& image : received.images["cam0"]) {
-    EXPECT_TRUE(SameImage(DecodeImageMessage(image), frames[image.trigger_seq % 3][0]));
+    EXPECT_TRUE(SameImage(testing::DecodedImage(image), frames[image.trigger_seq % 3][0]));
   }
   const std::vector<int64_t> cam1 = TriggerSeqs(received.images["cam1"]);
   ASSERT_GE(cam1.size(), 5u);

@@ -7,6 +7,7 @@
 
 #include "libs/sim/scene_generators.h"
 #include "runtime/dataset.h"
+#include "runtime/lcm/message_convert.h"
 
 namespace shapesense::testing {
 namespace fs = std::filesystem;
@@ -71,6 +72,14 @@ CameraConfig ReplayConfig(const std::string& name, const std::string& device,
 
 bool SameImage(const cv::Mat& a, const cv::Mat& b) {
   return a.size() == b.size() && a.type() == b.type() && cv::norm(a, b, cv::NORM_INF) == 0.0;
+}
+
+cv::Mat DecodedImage(const image_t& message) {
+  cv::Mat image;
+  const std::string error = message.pixel_format == image_t::PIXEL_MONO8
+                                ? ImageMessageToMono(message, &image)
+                                : ImageMessageToBgr(message, &image);
+  return error.empty() ? image : cv::Mat();
 }
 
 }  // namespace shapesense::testing

@@ -9,6 +9,7 @@
 
 #include "libs/camera/camera.h"
 #include "services/capture/camera_backend.h"
+#include "shapesense/image_t.hpp"
 
 namespace shapesense::testing {
 
@@ -39,5 +40,9 @@ CameraConfig ReplayConfig(const std::string& name, const std::string& device,
                           const std::string& trigger = "software");
 
 bool SameImage(const cv::Mat& a, const cv::Mat& b);
+
+// The pixels of an image message as published: MONO8 as grey, else BGR;
+// empty when the message does not decode.
+cv::Mat DecodedImage(const image_t& message);
 
 }  // namespace shapesense::testing

@@ -272,7 +272,7 @@ class CarvingConfigTest : public ::testing::Test {
 TEST_F(CarvingConfigTest, RunsFromAConfigWithPathsRelativeToItAndStops) {
   TestRig test_rig(3);
   test_rig.WriteFiles(dir_ / "data");
-  CarvingServiceArgs args;
+  ServiceArgs args;
   args.config =
       WriteConfig("rig: data/rig.yaml\nbackgrounds: data/background\ncarving:\n  voxel_size: 4\n");
   args.lcm_url = "memq://";
@@ -293,7 +293,7 @@ TEST_F(CarvingConfigTest, RunsFromAConfigWithPathsRelativeToItAndStops) {
 }
 
 TEST_F(CarvingConfigTest, BadConfigsAreRefusedNamingTheFileAndKeyBeforeLcmStarts) {
-  CarvingServiceArgs args;
+  ServiceArgs args;
   args.lcm_url = "udpm://239.255.76.67:7667?ttl=0";  // never opened: the errors come first
   std::atomic<bool> stop{false};
   std::ostringstream log;
@@ -335,13 +335,13 @@ TEST_F(CarvingConfigTest, BadConfigsAreRefusedNamingTheFileAndKeyBeforeLcmStarts
 }
 
 TEST(CarvingShippedConfigTest, TheExampleConfigsLoadWithTheDefaults) {
-  CarvingServiceArgs args;
+  ServiceArgs args;
   args.config = fs::path(SHAPESENSE_SOURCE_DIR) / "config" / "carving_service.yaml";
   const CarvingServiceOptions carving = LoadCarvingServiceOptions(args);
   EXPECT_EQ(carving.carving.voxel_size, CarvingOptions{}.voxel_size);
   EXPECT_EQ(carving.queue_capacity, CarvingServiceOptions{}.queue_capacity);
   EXPECT_EQ(fs::path(carving.rig).filename(), "rig.yaml");
-  ShapeServiceArgs shape_args;
+  ServiceArgs shape_args;
   shape_args.config = fs::path(SHAPESENSE_SOURCE_DIR) / "config" / "shape_service.yaml";
   const ShapeServiceOptions shape = LoadShapeServiceOptions(shape_args);
   EXPECT_EQ(shape.rig, carving.rig);

@@ -218,7 +218,7 @@ TEST(ShapeServiceRunTest, StartsAndStopsOnMemq) {
   const std::filesystem::path dir =
       std::filesystem::temp_directory_path() / ("shape_run_test_" + std::to_string(::getpid()));
   TestRig(5).WriteFiles(dir);
-  ShapeServiceArgs args;
+  ServiceArgs args;
   args.rig = dir / "rig.yaml";
   args.backgrounds = dir / "background";
   args.lcm_url = "memq://";
