@@ -1,0 +1,24 @@
+#pragma once
+
+#include <memory>
+
+#include "clients/controller/actuators/actuator_driver.h"
+#include "clients/controller/actuators/actuator_options.h"
+#include "clients/controller/actuators/simulated_driver.h"
+
+namespace shapesense {
+
+// What a process gives the drivers besides their options.
+struct ActuatorDriverContext {
+  // simulated: receives the tendons' displacements (the virtual rig's plant).
+  TendonPlantCallback plant;
+  // simulated: the clock (empty: the host clock).
+  MicrosecondClock clock;
+};
+
+// The driver `options.driver` names, not yet connected (nothing is opened
+// here). Throws std::invalid_argument on options that fail Validate().
+std::unique_ptr<ActuatorDriver> MakeActuatorDriver(const ActuatorOptions& options,
+                                                   ActuatorDriverContext context = {});
+
+}  // namespace shapesense
