@@ -28,11 +28,12 @@ class LcmBus {
     return lcm_.publish(channel, &message) == 0;
   }
 
-  // Handler gets the decoded message, the channel it came on, and the receive
+  // Handler gets the decoded message (its own: it may move from it, which
+  // saves copying a camera image), the channel it came on, and the receive
   // time (µs since epoch). `channel` may be an LCM regular expression.
   template <class Message>
   void Subscribe(const std::string& channel,
-                 std::function<void(const Message&, const std::string&, int64_t)> handler) {
+                 std::function<void(Message&&, const std::string&, int64_t)> handler) {
     auto subscription = std::make_unique<Typed<Message>>(this, std::move(handler));
     // A plain function, not a member pointer: GCC 12's UBSan misreads LCM's
     // member-pointer subscription path (a false "misaligned address").
@@ -55,7 +56,7 @@ class LcmBus {
 
   template <class Message>
   struct Typed : SubscriptionBase {
-    Typed(LcmBus* bus, std::function<void(const Message&, const std::string&, int64_t)> handler)
+    Typed(LcmBus* bus, std::function<void(Message&&, const std::string&, int64_t)> handler)
         : bus_(bus), handler_(std::move(handler)) {}
 
     static void OnRawStatic(const lcm::ReceiveBuffer* buffer, const std::string& channel,
@@ -72,14 +73,14 @@ class LcmBus {
         return;
       }
       try {
-        handler_(message, channel, buffer->recv_utime);
+        handler_(std::move(message), channel, buffer->recv_utime);
       } catch (...) {
         ++bus_->handler_errors_;
       }
     }
 
     LcmBus* bus_;
-    std::function<void(const Message&, const std::string&, int64_t)> handler_;
+    std::function<void(Message&&, const std::string&, int64_t)> handler_;
   };
 
   void Reject(const std::string& channel, const std::string& why);

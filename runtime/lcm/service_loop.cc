@@ -1,5 +1,7 @@
 #include "runtime/lcm/service_loop.h"
 
+#include <malloc.h>
+
 #include <chrono>
 #include <csignal>
 #include <thread>
@@ -24,6 +26,11 @@ void RunBusLoop(LcmBus& bus, const std::atomic<bool>& stop, double duration_s,
     if (bus.Handle(20) < 0) std::this_thread::sleep_for(std::chrono::milliseconds(20));
     poll(NowUtime());
   }
+}
+
+void KeepFreedMemoryForReuse() {
+  mallopt(M_MMAP_THRESHOLD, 32 << 20);
+  mallopt(M_TRIM_THRESHOLD, 1 << 30);
 }
 
 const std::atomic<bool>& StopFlagOnSignals() {

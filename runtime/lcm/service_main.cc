@@ -30,6 +30,7 @@ void PrintCounters(const std::string& name, const service_status_t& status) {
 
 int ServiceMain(int argc, char** argv, const std::string& name, const std::string& description,
                 const std::string& example_config, const RunServiceFunction& run) {
+  KeepFreedMemoryForReuse();
   CLI::App app{name + ": " + description};
   ServiceArgs args;
   std::string lcm_url;

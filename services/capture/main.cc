@@ -10,6 +10,7 @@
 
 int main(int argc, char** argv) {
   using namespace shapesense;
+  KeepFreedMemoryForReuse();
   CLI::App app("shapesense-capture: camera images on LCM (Aravis, V4L2, replay, simulated)");
   std::string config;
   std::vector<std::string> cameras;

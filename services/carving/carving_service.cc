@@ -45,27 +45,27 @@ CarvingService::CarvingService(const CarvingServiceOptions& options, RigSetup se
         CarveAndPublish(set);
       }) {
   bus_.Subscribe<image_t>(channels::kImagePattern,
-                          [this](const image_t& image, const std::string&, int64_t receive_utime) {
-                            OnImage(image, receive_utime);
+                          [this](image_t&& image, const std::string&, int64_t receive_utime) {
+                            OnImage(std::move(image), receive_utime);
                           });
 }
 
-void CarvingService::OnImage(const image_t& image, int64_t receive_utime) {
+void CarvingService::OnImage(image_t&& image, int64_t receive_utime) {
   status_.Received();
   if (const std::string error = ValidateImageMessage(image); !error.empty()) {
     status_.Rejected();
     status_.Note(error);
     return;
   }
+  const std::string source = image.camera + " (trigger " + std::to_string(image.trigger_seq) + ")";
   const int64_t dropped_before = assembler_.counters().DroppedSets();
-  AssemblyResult result = assembler_.Add(image, receive_utime);
+  AssemblyResult result = assembler_.Add(std::move(image), receive_utime);
   CountAssemblyDrops(dropped_before);
   if (result.outcome == AssemblyOutcome::kCompleted) {
     worker_.Push(std::move(*result.completed));
   } else if (result.outcome != AssemblyOutcome::kPending) {
     status_.Rejected();
-    status_.Note(image.camera + ": " + AssemblyOutcomeName(result.outcome) + " (trigger " +
-                 std::to_string(image.trigger_seq) + ")");
+    status_.Note(source + ": " + AssemblyOutcomeName(result.outcome));
   }
 }
 

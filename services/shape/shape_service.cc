@@ -58,25 +58,27 @@ ShapeService::ShapeService(const ShapeServiceOptions& options, RigSetup setup, L
                                        int64_t receive_utime) { OnVoxels(voxels, receive_utime); });
   if (stage_.wants_images()) {
     bus_.Subscribe<image_t>(channels::kImagePattern,
-                            [this](const image_t& image, const std::string&,
-                                   int64_t receive_utime) { OnImage(image, receive_utime); });
+                            [this](image_t&& image, const std::string&, int64_t receive_utime) {
+                              OnImage(std::move(image), receive_utime);
+                            });
   }
 }
 
-void ShapeService::OnImage(const image_t& image, int64_t receive_utime) {
+void ShapeService::OnImage(image_t&& image, int64_t receive_utime) {
   if (const std::string error = ValidateImageMessage(image); !error.empty()) {
     status_.Rejected();
     status_.Note(error);
     return;
   }
+  const std::string camera = image.camera;
   const int64_t dropped_before = assembler_.counters().DroppedSets();
-  AssemblyResult result = assembler_.Add(image, receive_utime);
+  AssemblyResult result = assembler_.Add(std::move(image), receive_utime);
   CountAssemblyDrops(dropped_before);
   if (result.outcome == AssemblyOutcome::kCompleted) {
     OnFrameSet(std::move(*result.completed));
   } else if (result.outcome != AssemblyOutcome::kPending) {
     status_.Rejected();
-    status_.Note(image.camera + ": " + AssemblyOutcomeName(result.outcome));
+    status_.Note(camera + ": " + AssemblyOutcomeName(result.outcome));
   }
 }
 

@@ -93,7 +93,7 @@ class ShapeService {
     int64_t complete_utime = 0;
   };
 
-  void OnImage(const image_t& image, int64_t receive_utime);
+  void OnImage(image_t&& image, int64_t receive_utime);
   void OnVoxels(const voxel_cloud_t& voxels, int64_t receive_utime);
   void OnFrameSet(FrameSet set);
   void CountAssemblyDrops(int64_t before);
