@@ -4,6 +4,7 @@
 
 #include "libs/config/options_yaml.h"
 #include "libs/sim/tube_scene.h"
+#include "libs/control/control_options.h"
 #include "runtime/sensing_pipeline.h"
 
 namespace shapesense {
@@ -19,6 +20,7 @@ std::string DocumentedDefaults(const std::string& component) {
            "defaults.\n" +
            OptionsToDocumentedYaml(RenderOptions{});
   }
+  if (component == "controller") return ControllerDocumentedYaml();
   return {};
 }
 
@@ -26,11 +28,11 @@ void AddConfigCommand(CLI::App& app) {
   auto component = std::make_shared<std::string>();
   CLI::App* command = app.add_subcommand(
       "config", "Print a component's options with their documentation and defaults");
-  command->add_option("component", *component, "pipeline | render")->required();
+  command->add_option("component", *component, "pipeline | render | controller")->required();
   command->callback([component] {
     const std::string text = DocumentedDefaults(*component);
     if (text.empty())
-      throw CLI::ValidationError("component", "unknown: " + *component + " (pipeline | render)");
+      throw CLI::ValidationError("component", "unknown: " + *component + " (pipeline | render | controller)");
     std::cout << text;
   });
 }

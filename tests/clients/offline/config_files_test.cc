@@ -34,5 +34,12 @@ TEST(ConfigFilesTest, RenderDefaultsRoundTrip) {
   EXPECT_EQ(DocumentedDefaults("nonsense"), "");
 }
 
+TEST(ConfigFilesTest, ControllerYamlIsWhatTheConfigCommandPrints) {
+  const std::filesystem::path path =
+      std::filesystem::path(SHAPESENSE_SOURCE_DIR) / "config" / "controller.yaml";
+  EXPECT_EQ(ReadTextFile(path), DocumentedDefaults("controller"))
+      << "regenerate: shapesense config controller > config/controller.yaml";
+}
+
 }  // namespace
 }  // namespace shapesense
