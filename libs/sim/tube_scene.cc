@@ -26,6 +26,7 @@ std::string CheckColour(const std::string& key, const std::array<double, 3>& bgr
 GroundTruth TruthOf(const TubeScene& scene) {
   GroundTruth truth;
   truth.centerline = scene.centerline;
+  truth.configuration = scene.configuration;
   if (scene.centerline.empty()) return truth;
   truth.tip = scene.centerline.back();
   const std::vector<double> arc = CumulativeArcLength(scene.centerline);

@@ -4,11 +4,13 @@
 #include <cstdint>
 #include <memory>
 #include <opencv2/core.hpp>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "libs/camera/camera.h"
 #include "libs/geometry/types.h"
+#include "libs/mechanics/configuration.h"
 
 namespace shapesense {
 
@@ -28,6 +30,9 @@ struct TubeScene {
   double radius = 3.0;           // mm
   double lead_in_length = 40.0;  // mm, straight, behind the base
   std::vector<TapeBand> tapes;
+  // The manipulator's configuration when the scene was made from one
+  // (manipulator_scene.h); the renderer ignores it, TruthOf passes it on.
+  std::optional<Configuration> configuration;
 };
 
 // What the cameras should measure.
@@ -37,6 +42,7 @@ struct GroundTruth {
   double length = 0.0;        // mm
   std::vector<Vec3> markers;  // tape centres on the centreline, base → tip
   std::vector<double> marker_arc_length;
+  std::optional<Configuration> configuration;  // the scene's, when it has one
 };
 
 GroundTruth TruthOf(const TubeScene& scene);

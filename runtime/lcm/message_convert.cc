@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <iterator>
 #include <numeric>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
@@ -530,6 +531,11 @@ std::string ValidateShapeMessage(const shape_t& message) {
   }
   if (message.valid && points < 2)
     return Expected("num_points", ">= 2 for a valid shape", std::to_string(points));
+  if (message.has_configuration && (!std::all_of(std::begin(message.q), std::end(message.q),
+                                                 [](double v) { return std::isfinite(v); }) ||
+                                    !std::isfinite(message.configuration_residual_mm))) {
+    return Expected("q, configuration_residual_mm", "finite numbers", "others");
+  }
   return ValidateStageTimes(message.num_stage_times, message.stage_times);
 }
 
@@ -547,6 +553,17 @@ std::string ShapeFromMessage(const shape_t& message, ShapeEstimate* shape) {
   shape->length = message.length;
   shape->silhouette_residual_mm = message.centerline_residual_mm;
   return {};
+}
+
+void SetMessageConfiguration(const Configuration& q, double residual_mm, shape_t* message) {
+  message->has_configuration = true;
+  for (int i = 0; i < 4; ++i) message->q[i] = q(i);
+  message->configuration_residual_mm = residual_mm;
+}
+
+std::optional<Configuration> MessageConfiguration(const shape_t& message) {
+  if (!message.has_configuration) return std::nullopt;
+  return Configuration(message.q[0], message.q[1], message.q[2], message.q[3]);
 }
 
 stage_time_t MakeStageTime(const std::string& stage, int64_t duration_us, int64_t end_utime) {

@@ -7,11 +7,13 @@
 // libraries' types are always valid.
 #include <cstdint>
 #include <opencv2/core.hpp>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "libs/carving/voxel_grid.h"
 #include "libs/centerline/shape_estimator.h"
+#include "libs/mechanics/configuration.h"
 #include "shapesense/image_t.hpp"
 #include "shapesense/shape_t.hpp"
 #include "shapesense/stage_time_t.hpp"
@@ -97,6 +99,11 @@ shape_t ShapeToMessage(const ShapeEstimate& shape);
 // Checks the counts and that the numbers are finite; "" or the reason.
 std::string ValidateShapeMessage(const shape_t& message);
 std::string ShapeFromMessage(const shape_t& message, ShapeEstimate* shape);
+// Sets has_configuration, q and configuration_residual_mm (the arc fit's RMS
+// residual, mm; 0 for a true configuration).
+void SetMessageConfiguration(const Configuration& q, double residual_mm, shape_t* message);
+// The message's q, when it has one.
+std::optional<Configuration> MessageConfiguration(const shape_t& message);
 
 // ---- stage_time_t ----------------------------------------------------------
 

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <stdexcept>
 
 #include "libs/camera/rig_yaml.h"
 #include "libs/core/error.h"
@@ -32,6 +33,14 @@ void CheckBackgrounds(const Rig& rig, const std::vector<cv::Mat>& backgrounds) {
                        std::to_string(camera.width) + "x" + std::to_string(camera.height));
     }
   }
+}
+
+std::optional<ConfigurationSetup> CheckedConfiguration(std::optional<ConfigurationSetup> setup) {
+  if (!setup) return setup;
+  for (const std::string& error : {setup->geometry.Validate(), setup->options.Validate()}) {
+    if (!error.empty()) throw std::invalid_argument("configuration: " + error);
+  }
+  return setup;
 }
 
 // Extracts every camera's silhouette of decoded images.
@@ -138,12 +147,14 @@ std::string CarvingStage::Process(const FrameSet& set, CarvingOutput* out) const
 }
 
 ShapeStage::ShapeStage(const Rig& rig, std::vector<cv::Mat> backgrounds,
-                       const SilhouetteOptions& silhouette, const ShapeOptions& shape)
+                       const SilhouetteOptions& silhouette, const ShapeOptions& shape,
+                       std::optional<ConfigurationSetup> configuration)
     : rig_(rig),
       backgrounds_(std::move(backgrounds)),
       wants_images_(shape.refine_with_silhouettes),
       extractor_(silhouette),
-      estimator_(rig, shape) {
+      estimator_(rig, shape),
+      configuration_(CheckedConfiguration(std::move(configuration))) {
   if (wants_images_) CheckBackgrounds(rig_, backgrounds_);
 }
 
@@ -151,6 +162,19 @@ std::string ShapeStage::ExtractSilhouettes(const FrameSet& set, ShapeOutput* out
   if (std::string error = DecodeFrameSet(set, rig_, &out->images); !error.empty()) return error;
   ExtractAll(extractor_, out->images, backgrounds_, &out->silhouettes);
   return {};
+}
+
+void ShapeStage::SenseConfigurationOf(ShapeOutput* out) const {
+  out->configuration = SensedConfiguration{};
+  if (!configuration_) return;
+  const ShapeEstimate& estimate = out->estimate;
+  if (!estimate.valid) {
+    out->configuration.reason = "no shape";
+    return;
+  }
+  out->configuration =
+      SenseConfiguration({estimate.centerline, estimate.arc_length, estimate.marker_arc_length},
+                         configuration_->geometry, configuration_->options);
 }
 
 std::string ShapeStage::Process(const voxel_cloud_t& voxels, const FrameSet* images,
@@ -167,9 +191,13 @@ std::string ShapeStage::Process(const voxel_cloud_t& voxels, const FrameSet* ima
     }
   }
   out->estimate = estimator_.Estimate(out->cloud, out->silhouettes);
+  SenseConfigurationOf(out);
   const int64_t shape_us = MicrosecondsSince(start);
 
   out->message = ShapeToMessage(out->estimate);
+  if (out->configuration.valid) {
+    SetMessageConfiguration(out->configuration.q, out->configuration.rms_residual, &out->message);
+  }
   out->message.trigger_seq = voxels.trigger_seq;
   out->message.trigger_utime = voxels.trigger_utime;
   out->message.stage_times = voxels.stage_times;

@@ -6,12 +6,14 @@
 // stages on a recorded log, so replay reproduces the live shapes exactly.
 #include <filesystem>
 #include <opencv2/core.hpp>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "libs/camera/camera.h"
 #include "libs/carving/carver.h"
 #include "libs/centerline/shape_estimator.h"
+#include "libs/mechanics/configuration_sensing.h"
 #include "libs/silhouette/silhouette.h"
 #include "runtime/lcm/frame_set_assembler.h"
 #include "shapesense/shape_t.hpp"
@@ -79,9 +81,19 @@ class CarvingStage {
   Carver carver_;
 };
 
+// What the shape stage needs to sense the configuration q of the shape
+// (libs/mechanics/configuration_sensing.h).
+struct ConfigurationSetup {
+  ManipulatorGeometry geometry;  // rest lengths of the model file, base pose, tapes
+  ConfigurationSensingOptions options;
+};
+
 struct ShapeOutput {
   shape_t message;  // trigger and stage times from the cloud, + "shape"; header the publisher's
   ShapeEstimate estimate;  // as measured (shape_t has no tube radius)
+  // When the stage senses q: q (message.has_configuration, q,
+  // configuration_residual_mm) or why not (reason); else invalid, no reason.
+  SensedConfiguration configuration;
   // Set when the shape was measured without the silhouettes it should have
   // had (the frame-set was missing or did not decode): the reason.
   std::string warning;
@@ -91,18 +103,21 @@ struct ShapeOutput {
 };
 
 // Voxel cloud → shape, refined against the silhouettes of the frame-set the
-// cloud was carved from, extracted again here ("shape": extraction and
-// estimation).
+// cloud was carved from, extracted again here, and with a `configuration`
+// setup the configuration q of the shape ("shape": extraction, estimation
+// and q).
 class ShapeStage {
  public:
   // `backgrounds` may be empty when shape.refine_with_silhouettes is off.
   // Throws InputError on backgrounds that do not fit the rig,
-  // std::invalid_argument on options that fail validation.
+  // std::invalid_argument on options or a geometry that fail validation.
   ShapeStage(const Rig& rig, std::vector<cv::Mat> backgrounds, const SilhouetteOptions& silhouette,
-             const ShapeOptions& shape);
+             const ShapeOptions& shape, std::optional<ConfigurationSetup> configuration = {});
 
   // Whether Process wants the frame-set (refinement is on).
   bool wants_images() const { return wants_images_; }
+  // Whether Process senses q.
+  bool senses_configuration() const { return configuration_.has_value(); }
 
   // `images`: the frame-set of the cloud, or nullptr. "" when a shape was
   // produced (valid or not: an estimate that fails carries its error in the
@@ -112,12 +127,15 @@ class ShapeStage {
  private:
   // Fills out->silhouettes from the set; "" or why they could not be had.
   std::string ExtractSilhouettes(const FrameSet& set, ShapeOutput* out) const;
+  // out->configuration from out->estimate.
+  void SenseConfigurationOf(ShapeOutput* out) const;
 
   Rig rig_;
   std::vector<cv::Mat> backgrounds_;
   bool wants_images_;
   SilhouetteExtractor extractor_;
   ShapeEstimator estimator_;
+  std::optional<ConfigurationSetup> configuration_;
 };
 
 }  // namespace shapesense

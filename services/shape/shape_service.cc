@@ -2,7 +2,11 @@
 
 #include <algorithm>
 #include <cmath>
+#include <stdexcept>
 
+#include "libs/core/error.h"
+#include "libs/mechanics/manipulator_options.h"
+#include "runtime/file_io.h"
 #include "runtime/lcm/channels.h"
 #include "runtime/lcm/message_convert.h"
 #include "runtime/lcm/service_config.h"
@@ -20,7 +24,58 @@ std::string NameOf(const voxel_cloud_t& voxels) {
                                  : "frame-set at " + std::to_string(voxels.trigger_utime) + " us";
 }
 
+std::optional<ConfigurationSetup> MatchingConfiguration(
+    const ShapeServiceOptions& options, std::optional<ConfigurationSetup> configuration) {
+  if (options.configuration.enabled != configuration.has_value()) {
+    throw std::invalid_argument(
+        "ShapeService: configuration.enabled and the configuration setup disagree");
+  }
+  return configuration;
+}
+
+bool AllFinite(const std::array<double, 3>& values) {
+  return std::all_of(values.begin(), values.end(), [](double v) { return std::isfinite(v); });
+}
+
 }  // namespace
+
+std::string ShapeConfigurationOptions::Validate() const {
+  if (enabled && manipulator.empty()) {
+    return "manipulator: expected the manipulator model file (configuration is enabled), got "
+           "nothing";
+  }
+  if (!AllFinite(base_position)) return "base_position: expected finite numbers";
+  if (!AllFinite(base_rotation)) return "base_rotation: expected finite numbers";
+  if (const std::string error = tapes.Validate(); !error.empty()) return "tapes." + error;
+  if (const std::string error = sensing.Validate(); !error.empty()) return "sensing." + error;
+  return {};
+}
+
+Pose3 ShapeConfigurationOptions::WorldFromBase() const {
+  const Vec3 rotation(base_rotation[0], base_rotation[1], base_rotation[2]);
+  Pose3 pose = Pose3::Identity();
+  if (rotation.norm() > 0.0) {
+    pose.linear() = Eigen::AngleAxisd(rotation.norm(), rotation.normalized()).toRotationMatrix();
+  }
+  pose.translation() = Vec3(base_position[0], base_position[1], base_position[2]);
+  return pose;
+}
+
+std::optional<ConfigurationSetup> LoadConfigurationSetup(const ShapeServiceOptions& options) {
+  const ShapeConfigurationOptions& section = options.configuration;
+  if (!section.enabled) return std::nullopt;
+  const ManipulatorOptions model =
+      ParseManipulatorYaml(ReadTextFile(section.manipulator), section.manipulator);
+  ConfigurationSetup setup;
+  setup.geometry.rest = {model.proximal_length, model.distal_length};
+  setup.geometry.world_from_base = section.WorldFromBase();
+  setup.geometry.tapes = section.tapes;
+  setup.options = section.sensing;
+  if (const std::string error = setup.geometry.Validate(); !error.empty()) {
+    throw InputError("configuration." + error + " (model file " + section.manipulator + ")");
+  }
+  return setup;
+}
 
 std::string ShapeServiceOptions::Validate() const {
   if (rig.empty()) return "rig: expected the rig file, got nothing";
@@ -31,7 +86,8 @@ std::string ShapeServiceOptions::Validate() const {
   }
   for (const auto& [section, error] :
        {std::pair{"silhouette.", silhouette.Validate()}, std::pair{"shape.", shape.Validate()},
-        std::pair{"assembly.", assembly.Validate()}}) {
+        std::pair{"assembly.", assembly.Validate()},
+        std::pair{"configuration.", configuration.Validate()}}) {
     if (!error.empty()) return section + error;
   }
   if (!(pairing_timeout_ms >= 1 && pairing_timeout_ms <= 60000)) {
@@ -43,10 +99,12 @@ std::string ShapeServiceOptions::Validate() const {
   return {};
 }
 
-ShapeService::ShapeService(const ShapeServiceOptions& options, RigSetup setup, LcmBus& bus)
+ShapeService::ShapeService(const ShapeServiceOptions& options, RigSetup setup, LcmBus& bus,
+                           std::optional<ConfigurationSetup> configuration)
     : options_(options),
       bus_(bus),
-      stage_(setup.rig, std::move(setup.backgrounds), options.silhouette, options.shape),
+      stage_(setup.rig, std::move(setup.backgrounds), options.silhouette, options.shape,
+             MatchingConfiguration(options, std::move(configuration))),
       pairing_timeout_us_(static_cast<int64_t>(std::llround(options.pairing_timeout_ms * 1e3))),
       assembler_(CameraNames(setup.rig), options.assembly),
       worker_(
@@ -167,12 +225,19 @@ void ShapeService::MeasureAndPublish(const Job& job) {
     return;
   }
   status_.Published();
-  if (!output_.estimate.valid) status_.Note(NameOf(job.voxels) + ": " + output_.estimate.error);
+  if (!output_.estimate.valid) {
+    status_.Note(NameOf(job.voxels) + ": " + output_.estimate.error);
+  } else if (stage_.senses_configuration() && !output_.configuration.valid) {
+    status_.Note(NameOf(job.voxels) + ": no configuration: " + output_.configuration.reason);
+  }
 }
 
 ShapeServiceOptions LoadShapeServiceOptions(const ServiceArgs& args) {
-  return LoadServiceOptions<ShapeServiceOptions>(args.config,
-                                                 {args.rig, args.backgrounds, args.lcm_url});
+  ShapeServiceOptions options = LoadServiceOptions<ShapeServiceOptions>(
+      args.config, {args.rig, args.backgrounds, args.lcm_url});
+  options.configuration.manipulator =
+      ResolveConfigPath(args.config, options.configuration.manipulator).string();
+  return options;
 }
 
 service_status_t RunShapeService(const ServiceArgs& args, const std::atomic<bool>& stop,
@@ -180,11 +245,13 @@ service_status_t RunShapeService(const ServiceArgs& args, const std::atomic<bool
   const ShapeServiceOptions options = LoadShapeServiceOptions(args);
   const std::string backgrounds = options.shape.refine_with_silhouettes ? options.backgrounds : "";
   RigSetup setup = LoadRigSetup(options.rig, backgrounds);
+  std::optional<ConfigurationSetup> configuration = LoadConfigurationSetup(options);
   LcmBus bus(options.lcm_url);
-  ShapeService service(options, std::move(setup), bus);
+  ShapeService service(options, std::move(setup), bus, std::move(configuration));
   log << "shapesense-shape: running on "
       << (options.lcm_url.empty() ? "LCM's default" : options.lcm_url)
-      << (options.shape.refine_with_silhouettes ? ", refining against the silhouettes\n" : "\n");
+      << (options.shape.refine_with_silhouettes ? ", refining against the silhouettes" : "")
+      << (options.configuration.enabled ? ", sensing the configuration q" : "") << '\n';
   RunBusLoop(bus, stop, args.duration_s, [&](int64_t now) { service.Poll(now); });
   return service.Status(NowUtime());
 }

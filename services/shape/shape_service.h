@@ -10,6 +10,7 @@
 // The alternative, the carving service sending edge data, would save that
 // work but tie the two services to one more message format; the images are
 // multicast to every subscriber anyway, so the network carries them once.
+#include <array>
 #include <atomic>
 #include <deque>
 #include <optional>
@@ -17,6 +18,7 @@
 #include <string>
 
 #include "libs/centerline/shape_estimator.h"
+#include "libs/mechanics/configuration_sensing.h"
 #include "libs/silhouette/silhouette.h"
 #include "runtime/lcm/frame_set_assembler.h"
 #include "runtime/lcm/lcm_bus.h"
@@ -26,6 +28,40 @@
 #include "runtime/lcm/service_worker.h"
 
 namespace shapesense {
+
+// The `configuration:` section: the configuration q = [kappa_x, kappa_z,
+// eps0, eps1] of every shape, in shape_t (has_configuration, q,
+// configuration_residual_mm); see libs/mechanics/configuration_sensing.h and
+// docs/mechanics.md for the tape layout and how q is measured.
+struct ShapeConfigurationOptions {
+  bool enabled = false;
+  // The manipulator model file (its rest lengths L0, L1; config/manipulator.yaml),
+  // relative to the config file's folder.
+  std::string manipulator;
+  // world_from_base, the base frame in the cameras' world: x_world =
+  // R x_base + base_position (mm), R the rotation by the rotation vector
+  // base_rotation (unit axis times angle, rad). The base frame's y axis runs
+  // along the manipulator: [1.5707963267948966, 0, 0] turns it onto world +z.
+  std::array<double, 3> base_position = {0.0, 0.0, 0.0};
+  std::array<double, 3> base_rotation = {0.0, 0.0, 0.0};
+  TapeLayout tapes;
+  ConfigurationSensingOptions sensing;
+
+  template <class Visitor>
+  void VisitFields(Visitor&& visit) {
+    visit("enabled", enabled, "sense q (else has_configuration is false)");
+    visit("manipulator", manipulator,
+          "manipulator model file (rest lengths), relative to this file; needed when enabled");
+    visit("base_position", base_position, "world_from_base: the base's origin in the world, mm");
+    visit("base_rotation", base_rotation,
+          "world_from_base: rotation vector (axis * angle, rad); [1.5707963267948966, 0, 0] "
+          "turns the base's y axis (along the manipulator) onto world +z");
+    visit("tapes", tapes, "tape bands: at the junction, before the tip, optionally proximal");
+    visit("sensing", sensing, "measuring the sections and fitting the arc");
+  }
+  std::string Validate() const;
+  Pose3 WorldFromBase() const;
+};
 
 // config/shape_service.yaml documents every key.
 struct ShapeServiceOptions {
@@ -44,6 +80,7 @@ struct ShapeServiceOptions {
   // Voxel clouds waiting for the worker; on overload the oldest is dropped.
   int queue_capacity = 2;
   std::string lcm_url;
+  ShapeConfigurationOptions configuration;
 
   template <class Visitor>
   void VisitFields(Visitor&& visit) {
@@ -58,9 +95,18 @@ struct ShapeServiceOptions {
           "wait of a voxel cloud for its images and of images for their cloud, ms (1-60000)");
     visit("queue_capacity", queue_capacity, "voxel clouds waiting for the worker (1-100)");
     visit("lcm_url", lcm_url, "LCM provider URL (empty: LCM_DEFAULT_URL or LCM's default)");
+    visit("configuration", configuration,
+          "the configuration q of each shape (tape markers + arc fit; off by default)");
   }
   std::string Validate() const;
 };
+
+// The shape stage's configuration setup of the options: nullopt when
+// configuration.enabled is off, else the model file's rest lengths with the
+// section's base pose, tapes and sensing options. Throws InputError naming
+// the file on a model file that cannot be read or parsed, or naming the key
+// when the tapes do not fit the model's sections.
+std::optional<ConfigurationSetup> LoadConfigurationSetup(const ShapeServiceOptions& options);
 
 // The service on a bus that someone else handles (RunShapeService, or a test
 // running several services on one memq:// bus).
@@ -69,8 +115,12 @@ struct ShapeServiceOptions {
 class ShapeService {
  public:
   // Subscribes to the voxels (and, when refining, the cameras) and starts
-  // the worker. Throws InputError on backgrounds that do not fit the rig.
-  ShapeService(const ShapeServiceOptions& options, RigSetup setup, LcmBus& bus);
+  // the worker. `configuration`: LoadConfigurationSetup(options). Throws
+  // InputError on backgrounds that do not fit the rig,
+  // std::invalid_argument when `configuration` and
+  // options.configuration.enabled disagree.
+  ShapeService(const ShapeServiceOptions& options, RigSetup setup, LcmBus& bus,
+               std::optional<ConfigurationSetup> configuration = {});
   ShapeService(const ShapeService&) = delete;
   ShapeService& operator=(const ShapeService&) = delete;
 

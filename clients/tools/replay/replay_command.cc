@@ -5,6 +5,7 @@
 #include <iomanip>
 #include <lcm/lcm-cpp.hpp>
 #include <memory>
+#include <optional>
 #include <regex>
 
 #include "libs/core/error.h"
@@ -61,6 +62,10 @@ class ShapeWriter {
           ShapeToJson(FrameNameOf(shape.trigger_seq, shape.trigger_utime), estimate, times, 0.0);
       line["trigger_seq"] = shape.trigger_seq;
       line["trigger_utime"] = shape.trigger_utime;
+      if (shape.has_configuration) {
+        line["q"] = {shape.q[0], shape.q[1], shape.q[2], shape.q[3]};
+        line["configuration_residual_mm"] = shape.configuration_residual_mm;
+      }
       json_ << line.dump() << '\n';
     }
     if (log_) WriteEvent(channels::kShape, shape, timestamp);
@@ -91,10 +96,12 @@ class ShapeWriter {
 class ReplayPipeline {
  public:
   ReplayPipeline(const CarvingServiceOptions& carving, const ShapeServiceOptions& shape,
-                 RigSetup setup, ShapeWriter& writer, const ReplayObserver& observer, bool progress)
+                 std::optional<ConfigurationSetup> configuration, RigSetup setup,
+                 ShapeWriter& writer, const ReplayObserver& observer, bool progress)
       : carving_stage_(setup.rig, setup.backgrounds, carving.silhouette, carving.carving,
                        TableProgress(progress)),
-        shape_stage_(setup.rig, setup.backgrounds, shape.silhouette, shape.shape),
+        shape_stage_(setup.rig, setup.backgrounds, shape.silhouette, shape.shape,
+                     std::move(configuration)),
         assembler_(CameraNames(setup.rig), carving.assembly),
         writer_(writer),
         observer_(observer) {}
@@ -179,6 +186,7 @@ double FractionRead(lcm::LogFile& file, double size) {
 ReplaySummary RunReplay(const ReplayArgs& args, std::ostream& log, const ReplayObserver& observer) {
   const auto [carving, shape] = LoadReplayOptions(args);
   RigSetup setup = LoadRigSetup(carving.rig, carving.backgrounds);
+  std::optional<ConfigurationSetup> configuration = LoadConfigurationSetup(shape);
   std::error_code error;
   const double size = static_cast<double>(fs::file_size(args.log, error));
   lcm::LogFile input(args.log.string(), "r");
@@ -187,7 +195,8 @@ ReplaySummary RunReplay(const ReplayArgs& args, std::ostream& log, const ReplayO
   ShapeWriter writer(args);
   log << "replay " << args.log.string() << ": " << setup.rig.cameras.size()
       << " cameras, voxel size " << carving.carving.voxel_size << " mm\n";
-  ReplayPipeline pipeline(carving, shape, std::move(setup), writer, observer, args.progress);
+  ReplayPipeline pipeline(carving, shape, std::move(configuration), std::move(setup), writer,
+                          observer, args.progress);
 
   const std::regex image_channel(channels::kImagePattern);
   ReplaySummary summary;

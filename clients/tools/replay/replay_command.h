@@ -21,7 +21,7 @@ struct ReplayArgs {
   std::filesystem::path out_log;  // LCM log of shape_t on the shape channel (may be empty)
   std::filesystem::path
       config;  // the carving service's config (rig, backgrounds, silhouette, carving, assembly)
-  std::filesystem::path shape_config;  // the shape service's config (silhouette, shape)
+  std::filesystem::path shape_config;  // the shape service's config (silhouette, shape, q)
   std::filesystem::path rig;           // override both configs'
   std::filesystem::path backgrounds;
   bool progress = true;  // progress bar on a terminal
