@@ -27,5 +27,15 @@ inline constexpr const char* kStatusPattern = "SHAPESENSE_STATUS_.*";
 // Tendon commands and actuator state: tendon_command_t, tendon_state_t.
 inline constexpr const char* kTendonCommand = "SHAPESENSE_TENDON_COMMAND";
 inline constexpr const char* kTendonState = "SHAPESENSE_TENDON_STATE";
+// Targets streamed to the controller: configuration_target_t.
+inline constexpr const char* kTarget = "SHAPESENSE_TARGET";
+// Emergency stop and its release: estop_t.
+inline constexpr const char* kEstop = "SHAPESENSE_ESTOP";
+// The link between the controller's rig driver and the virtual rig's tendon
+// plant: the commands (tendon_command_t) and the plant's actuators as they
+// stand (tendon_state_t). The controller publishes what it commanded and what
+// its actuators report on kTendonCommand / kTendonState, whatever the driver.
+inline constexpr const char* kPlantCommand = "SHAPESENSE_PLANT_COMMAND";
+inline constexpr const char* kPlantState = "SHAPESENSE_PLANT_STATE";
 
 }  // namespace shapesense::channels

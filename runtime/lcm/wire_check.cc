@@ -10,6 +10,8 @@ constexpr size_t kStageTail = 16;  // stage_time_t after its name: duration_us, 
 constexpr size_t kImageFixed = 4 + 4 + 4 + 1 + 1 + 4 + 4 + 8 + 8 + 8 + 8;  // width ... host_utime
 constexpr size_t kVoxelFixed = 8 + 8 + 3 * 8 + 8 + 3 * 4;                  // trigger_seq ... dims
 constexpr size_t kShapeTail = 3 * 8 + 8 + 1 + 4 * 8 + 8 + 8;  // tip ... configuration_residual_mm
+constexpr size_t kCommandTail = 8 + 1;                        // source_trigger_seq, mode
+constexpr size_t kTendonStateEach = 8 + 8 + 4;                // displacement_mm, tension_n, fault
 
 // Walks a buffer, failing as soon as a length does not fit.
 class WireWalker {
@@ -90,6 +92,20 @@ bool WireCheck<shape_t>::Plausible(const uint8_t* data, size_t size) {
          walk.SkipArray(points, 3 * 8 + 8 + 8) && walk.Count(&markers) &&
          walk.SkipArray(markers, 3 * 8 + 8) && walk.Skip(kShapeTail) && walk.StageTimes() &&
          walk.AtEnd();
+}
+
+bool WireCheck<tendon_command_t>::Plausible(const uint8_t* data, size_t size) {
+  WireWalker walk(data, size);
+  int64_t tendons = 0;
+  return walk.Skip(kHash + kHeader) && walk.Count(&tendons) && walk.SkipArray(tendons, 8) &&
+         walk.Skip(kCommandTail) && walk.AtEnd();
+}
+
+bool WireCheck<tendon_state_t>::Plausible(const uint8_t* data, size_t size) {
+  WireWalker walk(data, size);
+  int64_t tendons = 0;
+  return walk.Skip(kHash + kHeader) && walk.Count(&tendons) &&
+         walk.SkipArray(tendons, kTendonStateEach) && walk.AtEnd();
 }
 
 }  // namespace shapesense

@@ -16,12 +16,14 @@
 
 #include "shapesense/image_t.hpp"
 #include "shapesense/shape_t.hpp"
+#include "shapesense/tendon_command_t.hpp"
+#include "shapesense/tendon_state_t.hpp"
 #include "shapesense/voxel_cloud_t.hpp"
 
 namespace shapesense {
 
 // Types without variable-length arrays cannot over-allocate: any buffer may
-// be handed to their decoder.
+// be handed to their decoder (their strings are checked by lcm-gen's code).
 template <class Message>
 struct WireCheck {
   static bool Plausible(const uint8_t*, size_t) { return true; }
@@ -39,6 +41,14 @@ struct WireCheck<voxel_cloud_t> {
 };
 template <>
 struct WireCheck<shape_t> {
+  static bool Plausible(const uint8_t* data, size_t size);
+};
+template <>
+struct WireCheck<tendon_command_t> {
+  static bool Plausible(const uint8_t* data, size_t size);
+};
+template <>
+struct WireCheck<tendon_state_t> {
   static bool Plausible(const uint8_t* data, size_t size);
 };
 

@@ -16,6 +16,12 @@ std::unique_ptr<ActuatorDriver> MakeActuatorDriver(const ActuatorOptions& option
   if (options.driver == "serial") {
     return std::make_unique<SerialActuatorDriver>(options.serial, options.tendons);
   }
+  if (options.driver == "rig") {
+    // This library has no LCM; the controller client makes that driver.
+    throw std::invalid_argument(
+        "actuators: driver rig talks LCM; make it with the controller client's "
+        "MakeControllerDriver (clients/controller/rig_plant_driver.h)");
+  }
   if (options.driver == "socketcan") {
     const std::string interface = options.canopen.interface;
     return std::make_unique<CanOpenActuatorDriver>(

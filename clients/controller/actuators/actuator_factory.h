@@ -17,7 +17,8 @@ struct ActuatorDriverContext {
 };
 
 // The driver `options.driver` names, not yet connected (nothing is opened
-// here). Throws std::invalid_argument on options that fail Validate().
+// here). Throws std::invalid_argument on options that fail Validate(), and
+// for driver rig (it needs LCM: clients/controller/rig_plant_driver.h).
 std::unique_ptr<ActuatorDriver> MakeActuatorDriver(const ActuatorOptions& options,
                                                    ActuatorDriverContext context = {});
 

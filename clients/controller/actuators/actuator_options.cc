@@ -105,14 +105,25 @@ std::string SimulatedActuatorOptions::Validate() const {
   return "";
 }
 
+std::string RigActuatorOptions::Validate() const {
+  if (!InRange(state_timeout_s, 0.01, 60.0)) {
+    return Expected("state_timeout_s", "0.01-60 s", state_timeout_s);
+  }
+  if (!InRange(connect_timeout_s, 0.01, 60.0)) {
+    return Expected("connect_timeout_s", "0.01-60 s", connect_timeout_s);
+  }
+  return "";
+}
+
 std::string ActuatorOptions::Validate() const {
-  if (driver != "serial" && driver != "socketcan" && driver != "simulated") {
-    return Expected("driver", "serial, socketcan or simulated", "'" + driver + "'");
+  if (driver != "serial" && driver != "socketcan" && driver != "simulated" && driver != "rig") {
+    return Expected("driver", "serial, socketcan, simulated or rig", "'" + driver + "'");
   }
   if (tendons < 1 || tendons > 32) return Expected("tendons", "1-32", tendons);
   if (const std::string error = serial.Validate(); !error.empty()) return "serial." + error;
   if (const std::string error = canopen.Validate(); !error.empty()) return "canopen." + error;
   if (const std::string error = simulated.Validate(); !error.empty()) return "simulated." + error;
+  if (const std::string error = rig.Validate(); !error.empty()) return "rig." + error;
   if (driver == "socketcan" && static_cast<int>(canopen.node_ids.size()) != tendons) {
     return Expected("canopen.node_ids", "one node id per tendon (" + std::to_string(tendons) + ")",
                     std::to_string(canopen.node_ids.size()) + " ids");

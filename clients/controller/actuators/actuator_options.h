@@ -93,20 +93,40 @@ struct SimulatedActuatorOptions {
   std::string Validate() const;
 };
 
+// The virtual rig's plant over LCM (the controller client's rig driver,
+// clients/controller/rig_plant_driver.h): targets go out on
+// SHAPESENSE_PLANT_COMMAND, the actuators' positions come back on
+// SHAPESENSE_PLANT_STATE.
+struct RigActuatorOptions {
+  double state_timeout_s = 0.5;
+  double connect_timeout_s = 5.0;
+
+  template <class Visitor>
+  void VisitFields(Visitor&& visit) {
+    visit("state_timeout_s", state_timeout_s,
+          "no plant state for this long is a lost link, s (0.01-60)");
+    visit("connect_timeout_s", connect_timeout_s,
+          "Connect waits this long for the plant's first state, s (0.01-60)");
+  }
+  std::string Validate() const;
+};
+
 struct ActuatorOptions {
   std::string driver = "simulated";
   int tendons = 4;
   SerialActuatorOptions serial;
   CanOpenOptions canopen;
   SimulatedActuatorOptions simulated;
+  RigActuatorOptions rig;
 
   template <class Visitor>
   void VisitFields(Visitor&& visit) {
-    visit("driver", driver, "serial | socketcan | simulated");
+    visit("driver", driver, "serial | socketcan | simulated | rig");
     visit("tendons", tendons, "tendons (axes) the driver commands (1-32)");
     visit("serial", serial, "driver: serial (the line protocol of docs/actuators.md)");
     visit("canopen", canopen, "driver: socketcan (CANopen CiA 402 drives, profile position)");
     visit("simulated", simulated, "driver: simulated (the virtual rig's tendons)");
+    visit("rig", rig, "driver: rig (the virtual rig's plant over LCM)");
   }
   // Checks every section; node_ids must name one drive per tendon when the
   // driver is socketcan.

@@ -47,7 +47,7 @@ TEST(ActuatorOptionsTest, DocumentedYamlReadsBackToTheSameOptions) {
 TEST(ActuatorOptionsTest, EveryBadValueNamesItsKey) {
   const std::vector<std::pair<std::function<void(ActuatorOptions&)>, std::string>> cases = {
       {[](ActuatorOptions& o) { o.driver = "ethercat"; },
-       "driver: expected serial, socketcan or simulated, got 'ethercat'"},
+       "driver: expected serial, socketcan, simulated or rig, got 'ethercat'"},
       {[](ActuatorOptions& o) { o.tendons = 0; }, "tendons: expected 1-32, got 0"},
       {[](ActuatorOptions& o) { o.serial.device = ""; }, "serial.device: "},
       {[](ActuatorOptions& o) { o.serial.baud = 12345; }, "serial.baud: "},
@@ -72,6 +72,8 @@ TEST(ActuatorOptionsTest, EveryBadValueNamesItsKey) {
       {[](ActuatorOptions& o) { o.canopen.pdo_retries = 11; }, "canopen.pdo_retries: "},
       {[](ActuatorOptions& o) { o.simulated.time_constant_s = -1.0; },
        "simulated.time_constant_s: "},
+      {[](ActuatorOptions& o) { o.rig.state_timeout_s = 0.0; }, "rig.state_timeout_s: "},
+      {[](ActuatorOptions& o) { o.rig.connect_timeout_s = 100.0; }, "rig.connect_timeout_s: "},
       {[](ActuatorOptions& o) {
          o.driver = "socketcan";
          o.tendons = 3;
@@ -130,6 +132,10 @@ TEST(ActuatorFactoryTest, BuildsTheNamedDriverWithoutOpeningIt) {
   simulated->Connect();
   EXPECT_GT(plant_calls, 0);
 
+  options.driver = "rig";  // needs LCM: the controller client makes it
+  EXPECT_THROW(MakeActuatorDriver(options), std::invalid_argument);
+
+  options.driver = "simulated";
   options.tendons = 0;
   EXPECT_THROW(MakeActuatorDriver(options), std::invalid_argument);
 }

@@ -1,0 +1,95 @@
+#include "clients/controller/controller_command.h"
+
+#include <CLI/CLI.hpp>
+#include <cstdio>
+#include <iostream>
+#include <memory>
+
+#include "clients/controller/controller_client.h"
+#include "clients/controller/rig_plant_driver.h"
+#include "libs/core/error.h"
+#include "runtime/lcm/service_loop.h"
+
+namespace shapesense {
+namespace {
+
+constexpr const char* kName = "shapesense-controller";
+
+struct CommandLine {
+  std::filesystem::path config;
+  ControllerOverrides overrides;
+};
+
+void AddOptions(CLI::App& app, CommandLine& line, std::string& targets, std::string& lcm_url,
+                std::string& csv, std::string& lcm, double& duration) {
+  app.add_option("--config", line.config,
+                 "controller client config (config/controller_client.yaml)")
+      ->required();
+  app.add_option("--targets", targets, "trajectory file (.csv or YAML) or 'stream' (overrides)");
+  app.add_option("--lcm-url", lcm_url, "LCM provider URL (overrides the config)");
+  app.add_option("--log-csv", csv, "CSV log path, '' for none (overrides the config)");
+  app.add_option("--log-lcm", lcm, "LCM log path, '' for none (overrides the config)");
+  app.add_option("--duration", duration, "stop after this many seconds (overrides the config)");
+}
+
+void PrintSummary(ControllerClient& client, const ControllerLog& log, std::ostream& out) {
+  const ControllerCounters& c = client.counters();
+  const StepRecord& last = client.last_step();
+  char seconds[32];
+  std::snprintf(seconds, sizeof(seconds), "%.2f", last.time);
+  out << kName << ": stopped after " << seconds << " s: " << c.steps << " steps, "
+      << c.commands_sent << " commands sent, " << c.held_steps << " steps held; shapes "
+      << c.shapes_used << " used, " << c.shapes_without_configuration << " without q, "
+      << c.shapes_rejected << " rejected; targets " << c.targets_accepted << " accepted, "
+      << c.targets_rejected << " rejected; " << c.messages_rejected << " malformed messages, "
+      << c.inputs_dropped << " dropped; " << c.estops << " e-stops; logged " << log.rows()
+      << " rows, " << log.events() << " LCM events" << std::endl;
+}
+
+}  // namespace
+
+int RunController(const ControllerSetup& setup, const std::atomic<bool>& stop, std::ostream& out) {
+  ControllerLog log(setup.client.log.csv, setup.client.log.lcm, setup.actuators.tendons);
+  LcmBus bus(setup.client.lcm_url);
+  const std::unique_ptr<ActuatorDriver> driver = MakeControllerDriver(setup.actuators, bus);
+  ControllerClient client(setup, bus, *driver, log, {}, &out);
+  try {
+    client.Start();
+  } catch (const ActuatorError& e) {
+    out << kName << ": failed: actuators (" << driver->description() << "): " << e.what()
+        << std::endl;
+    driver->Disconnect();
+    return 1;
+  }
+  const int code = RunControllerLoop(client, stop);
+  PrintSummary(client, log, out);
+  if (code != 0) out << kName << ": failed: " << client.error() << std::endl;
+  return code;
+}
+
+int ControllerMain(int argc, char** argv) {
+  const std::atomic<bool>& stop = StopFlagOnSignals();  // before a Connect that may take seconds
+  CLI::App app{std::string(kName) +
+               ": tendon control on the sensed shape, within safety limits (docs/controller.md)"};
+  CommandLine line;
+  std::string targets, lcm_url, csv, lcm;
+  double duration = 0.0;
+  AddOptions(app, line, targets, lcm_url, csv, lcm, duration);
+  CLI11_PARSE(app, argc, argv);
+  if (app.count("--targets") > 0) line.overrides.targets = targets;
+  if (app.count("--lcm-url") > 0) line.overrides.lcm_url = lcm_url;
+  if (app.count("--log-csv") > 0) line.overrides.log_csv = csv;
+  if (app.count("--log-lcm") > 0) line.overrides.log_lcm = lcm;
+  if (app.count("--duration") > 0) line.overrides.duration_s = duration;
+  try {
+    return RunController(LoadControllerSetup(line.config, line.overrides), stop, std::cerr);
+  } catch (const InputError& e) {
+    std::cerr << kName << ": error: " << e.what() << std::endl;
+    return 2;
+  } catch (const std::exception& e) {
+    std::cerr << kName << ": failed: " << e.what() << std::endl;
+    return 1;
+  }
+}
+
+}  // namespace shapesense
