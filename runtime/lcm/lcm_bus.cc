@@ -7,9 +7,9 @@ namespace shapesense {
 
 LcmBus::LcmBus(const std::string& url) : lcm_(url) {
   if (!lcm_.good()) {
-    throw std::runtime_error("LCM could not start on '" +
-                             (url.empty() ? std::string("default") : url) +
-                             "' (is there a multicast route? see docs/capture.md, section LCM on a rig)");
+    throw std::runtime_error(
+        "LCM could not start on '" + (url.empty() ? std::string("default") : url) +
+        "' (is there a multicast route? see docs/capture.md, section LCM on a rig)");
   }
 }
 

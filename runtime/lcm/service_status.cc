@@ -17,7 +17,8 @@ std::string HostName() {
 
 }  // namespace
 
-ServiceStatus::ServiceStatus(std::string service) : service_(std::move(service)), host_(HostName()) {}
+ServiceStatus::ServiceStatus(std::string service)
+    : service_(std::move(service)), host_(HostName()) {}
 
 void ServiceStatus::Error(const std::string& what) {
   ++errors_;
@@ -37,10 +38,13 @@ service_status_t ServiceStatus::Snapshot(int64_t now_utime, int64_t bus_rejected
   status.header.utime = now_utime;
   status.service = service_;
   status.host = host_;
-  const double seconds = last_utime_ > 0 ? static_cast<double>(now_utime - last_utime_) * 1e-6 : 0.0;
+  const double seconds =
+      last_utime_ > 0 ? static_cast<double>(now_utime - last_utime_) * 1e-6 : 0.0;
   if (seconds > 0) {
-    status.input_rate_hz = static_cast<float>(static_cast<double>(received_ - last_received_) / seconds);
-    status.output_rate_hz = static_cast<float>(static_cast<double>(published_ - last_published_) / seconds);
+    status.input_rate_hz =
+        static_cast<float>(static_cast<double>(received_ - last_received_) / seconds);
+    status.output_rate_hz =
+        static_cast<float>(static_cast<double>(published_ - last_published_) / seconds);
   }
   status.received = received_;
   status.published = published_;
@@ -54,6 +58,10 @@ service_status_t ServiceStatus::Snapshot(int64_t now_utime, int64_t bus_rejected
 
 void ServiceStatus::MaybePublish(LcmBus& bus, int64_t now_utime) {
   if (last_utime_ > 0 && now_utime - last_utime_ < 1'000'000) return;
+  Publish(bus, now_utime);
+}
+
+void ServiceStatus::Publish(LcmBus& bus, int64_t now_utime) {
   const service_status_t status = Snapshot(now_utime, bus.Rejected());
   bus.Publish(channels::Status(service_), status);
   std::lock_guard lock(mutex_);

@@ -39,6 +39,9 @@ constexpr std::array<std::pair<const char*, uint32_t>, 7> kPixelFormats = {{
 // After this long without a frame, a timeout asks the device whether it is
 // still there (a register read), at most once per interval.
 constexpr int64_t kProbeIntervalUs = 1'000'000;
+// A frame-set trigger time at most this old is this host's: images are
+// matched against it.
+constexpr int64_t kRecentTriggerUs = 1'000'000;
 
 int64_t HostUtime() { return g_get_real_time(); }
 
@@ -316,11 +319,18 @@ void AravisCamera::ThrowIfLost() const {
 }
 
 // Hardware triggers are announced, not sent: the frame-set a pulse starts.
+// An image is matched by its timestamp against the frame-set's trigger time
+// when that is a recent time of this host's clock (not against when this
+// camera's trigger left, up to half a period later): a camera triggered late
+// then answers the set that a view of the whole rig puts it in, the nearest
+// in time (the rig-sim places its images so).
 void AravisCamera::Trigger(int64_t seq, int64_t utime) {
   if (!IsOpen() || lost_ || mode_ == TriggerMode::kFreeRun) return;
   {
+    const int64_t now = HostUtime();
+    const bool recent = utime <= now && now - utime < kRecentTriggerUs;
     std::lock_guard lock(mutex_);
-    matcher_.Sent(PendingTrigger{seq, utime, HostUtime()});
+    matcher_.Sent(PendingTrigger{seq, utime, recent ? utime : now});
   }
   if (mode_ != TriggerMode::kSoftware) return;
   GError* error = nullptr;

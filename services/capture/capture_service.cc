@@ -22,6 +22,7 @@ namespace {
 using Clock = std::chrono::steady_clock;
 constexpr auto kGrabTimeout = std::chrono::milliseconds(100);  // bounds the reaction to a stop
 constexpr auto kStatusTick = std::chrono::milliseconds(50);
+constexpr auto kFirstSetWait = std::chrono::milliseconds(2000);
 
 // One camera, its grab thread and its trigger relay.
 struct CameraSlot {
@@ -38,7 +39,7 @@ struct CameraSlot {
   int64_t last_image_utime = 0;  // host time of the last image published, 0: none yet
   int64_t last_image_seq = -1;   // its trigger sequence
   Clock::time_point last_attempt{};
-  int64_t published = 0;
+  std::atomic<int64_t> published{0};  // the trigger thread waits for the first
   int64_t outages = 0;
   // Status (main) thread only: what of the backend's counters the status has counted.
   int64_t counted_drops = 0;
@@ -89,11 +90,13 @@ class CaptureService {
   void Grab(CameraSlot& slot);
   void PublishFrame(CameraSlot& slot, const CameraFrame& frame);
   void ReportGap(CameraSlot& slot, const CameraFrame& frame);
+  void WaitForFirstImages();
   void TriggerLoop();
   void TriggerAll(int64_t seq, int64_t utime);
   void RelayLoop(CameraSlot& slot);
   void PublishTruth(int64_t seq, int64_t utime);
-  void UpdateStatus();
+  // `last`: publish now (the final counts, as the service stops).
+  void UpdateStatus(bool last = false);
   void SleepUntil(Clock::time_point until) const;
   CaptureSummary Summary() const;
 
@@ -240,10 +243,19 @@ void CaptureService::TriggerAll(int64_t seq, int64_t utime) {
 
 // Triggers one camera. A trigger that waited too long (the camera was busy
 // or blocked) is skipped: its exposure would not belong to its frame-set.
+// Triggers to one camera are at least half a period apart: a camera still
+// busy with its last image would otherwise get the trigger that waited
+// meanwhile right after the last, and one that keeps a single
+// pending-trigger flag (as Aravis's fake camera does, served at its next
+// poll) would answer both with one image.
 void CaptureService::RelayLoop(CameraSlot& slot) {
+  const auto spacing = std::chrono::duration_cast<Clock::duration>(
+      std::chrono::duration<double>(0.5 / options_.trigger_rate_hz));
+  Clock::time_point next_send{};
   while (!stopping_) {
     const std::optional<QueuedTrigger> trigger = slot.relay.Pop(kGrabTimeout);
     if (!trigger) continue;
+    SleepUntil(next_send);
     // A camera being opened or closed is skipped rather than waited for.
     std::unique_lock lock(slot.open_mutex, std::try_to_lock);
     if (!lock.owns_lock() || !slot.up || NowUtime() - trigger->utime > stale_trigger_us_) {
@@ -255,6 +267,7 @@ void CaptureService::RelayLoop(CameraSlot& slot) {
     } catch (const std::exception&) {
       ++slot.missed_triggers;  // the grab thread finds out whether the camera is lost
     }
+    next_send = Clock::now() + spacing;
   }
 }
 
@@ -262,6 +275,23 @@ void CaptureService::PublishTruth(int64_t seq, int64_t utime) {
   const TrajectoryPose pose = world_->PoseAtUtime(utime);
   const TubeScene scene = SceneOf(world_->options().trajectory, world_->rig(), pose);
   Publish(channels::kTruth, FrameSetTruth(scene, pose, seq, utime, truth_seq_++, NowUtime()));
+}
+
+// Waits (at most kFirstSetWait) until every software-triggered camera that is
+// up has published an image. A camera's first image after its acquisition
+// started can be slow (Aravis's fake camera looks for its first trigger only
+// every 100 ms); triggering on meanwhile would make it answer several
+// triggers with one image, and their frame-sets would be lost.
+void CaptureService::WaitForFirstImages() {
+  const auto end = Clock::now() + kFirstSetWait;
+  const auto waiting = [&] {
+    return std::any_of(slots_.begin(), slots_.end(), [](const auto& slot) {
+      return slot->config.Trigger() == TriggerMode::kSoftware && slot->up && slot->published == 0;
+    });
+  };
+  while (!stopping_ && Clock::now() < end && waiting()) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(2));
+  }
 }
 
 void CaptureService::TriggerLoop() {
@@ -276,6 +306,7 @@ void CaptureService::TriggerLoop() {
     TriggerAll(seq, utime);
     if (world_ && options_.publish_truth) PublishTruth(seq, utime);
     triggers_ = seq + 1;
+    if (seq == 0) WaitForFirstImages();
     // After a stall the clock restarts from now rather than firing a burst.
     next = std::max(next + period, Clock::now());
   }
@@ -287,23 +318,40 @@ void CaptureService::SleepUntil(Clock::time_point until) const {
   }
 }
 
-void CaptureService::UpdateStatus() {
+// What a camera's dropped frame-sets were (the last status's last_error).
+std::string DropBreakdown(const CameraSlot& slot, const CameraStats& stats) {
+  return slot.config.name + ": " + std::to_string(stats.incomplete) + " incomplete images, " +
+         std::to_string(stats.missed_triggers) + " triggers answered with no image, " +
+         std::to_string(slot.missed_triggers + slot.relay.Dropped()) +
+         " triggers not sent (camera down, busy or too late)";
+}
+
+void CaptureService::UpdateStatus(bool last) {
+  std::string breakdown;
   for (const auto& slot : slots_) {
     const CameraStats stats = slot->backend->Stats();
     const int64_t drops =
         stats.incomplete + stats.missed_triggers + slot->missed_triggers + slot->relay.Dropped();
     status_.Dropped(drops - slot->counted_drops);
     slot->counted_drops = drops;
+    if (drops > 0) breakdown += (breakdown.empty() ? "" : "; ") + DropBreakdown(*slot, stats);
   }
   std::lock_guard lock(publish_mutex_);
-  status_.MaybePublish(bus_, NowUtime());
+  if (!last) {
+    status_.MaybePublish(bus_, NowUtime());
+    return;
+  }
+  // The last status says why frame-sets were dropped (while running, the
+  // last error, e.g. a camera lost, says more).
+  if (!breakdown.empty()) status_.Note("frame-sets dropped: " + breakdown);
+  status_.Publish(bus_, NowUtime());
 }
 
 CaptureSummary CaptureService::Summary() const {
   CaptureSummary summary;
   summary.triggers = triggers_;
   for (const auto& slot : slots_) {
-    summary.cameras[slot->config.name] = {slot->published, slot->outages,
+    summary.cameras[slot->config.name] = {slot->published.load(), slot->outages,
                                           slot->missed_triggers + slot->relay.Dropped(),
                                           slot->backend->Stats()};
   }
@@ -313,10 +361,12 @@ CaptureSummary CaptureService::Summary() const {
 CaptureSummary CaptureService::Run(const std::atomic<bool>& stop) {
   world_ = MakeSimulatedWorld(options_, NowUtime());
   MakeSlots();
-  // Four trigger periods late, or 250 ms, whichever is longer, a trigger is
-  // stale: long enough for a busy machine's scheduling, short of a blocked camera.
+  // Half a trigger period late a trigger is stale: the camera's exposure
+  // would lie nearer the next frame-set's trigger than its own, and a camera
+  // stamping its images (Aravis's backend tells the trigger an image answers
+  // by that stamp) could not be told from one answering the next trigger.
   stale_trigger_us_ =
-      std::max<int64_t>(250'000, static_cast<int64_t>(4e6 / options_.trigger_rate_hz));
+      std::max<int64_t>(2'000, static_cast<int64_t>(0.5e6 / options_.trigger_rate_hz));
   std::vector<std::thread> threads;
   bool any_software = false;
   for (const auto& slot : slots_) {
@@ -334,7 +384,7 @@ CaptureSummary CaptureService::Run(const std::atomic<bool>& stop) {
   }
   stopping_ = true;
   for (std::thread& thread : threads) thread.join();
-  UpdateStatus();
+  UpdateStatus(/*last=*/true);
   return Summary();
 }
 

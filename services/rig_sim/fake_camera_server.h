@@ -4,13 +4,18 @@
 // ArvGvFakeCamera, each on its own address (127.0.0.1, 127.0.0.2 ... inside a
 // network namespace: the address must belong to an interface). A camera's
 // image is made when it is triggered: the frame-set it belongs to is chosen
-// by a FrameSetClock, the set's scene is the trajectory at the time the set's
-// first trigger arrived, and each camera renders its own view of it (in its
-// own thread, with its own SceneRenderer) in the pixel format the client set.
+// by a FrameSetClock from the time its trigger arrived (a watcher thread
+// sees each camera's trigger register flip), the set's scene is the
+// trajectory at the time the set's first trigger arrived, and each camera
+// renders its own view of it (in its own thread, with its own SceneRenderer)
+// in the pixel format the client set. The image's timestamp is its
+// trigger's arrival, its exposure, whenever the camera's thread got to it.
 
 #include <atomic>
+#include <condition_variable>
 #include <cstdint>
 #include <deque>
+#include <future>
 #include <memory>
 #include <mutex>
 #include <optional>
@@ -70,16 +75,18 @@ class FakeCameraServer {
   int64_t images_served() const { return images_served_; }
   int64_t errors() const { return errors_; }
 
-  // The fill of one image (called by the camera's thread through Aravis);
-  // `first_of_session`: its first image since the acquisition started.
-  void Fill(int camera, void* data, int width, int height, uint32_t pixel_format,
-            bool first_of_session);
+  // The fill of one image (called by the camera's thread through Aravis).
+  // Returns how long its trigger waited for the camera's thread, µs.
+  int64_t Fill(int camera, void* data, int width, int height, uint32_t pixel_format);
 
   struct Slot;  // one camera's state (fake_camera_server.cc)
 
  private:
-  FrameSet Assign(int camera, int64_t now_utime, int64_t session_start_utime);
-  void WatchAcquisitions();
+  FrameSet Assign(int camera, int64_t trigger_utime);
+  void WatchTriggers();
+  // Render() on a render thread, waiting for it.
+  cv::Mat RenderOnWorker(int camera, const FrameSet& set);
+  void RenderJobs();
 
   const Rig rig_;
   const TrajectoryOptions trajectory_;
@@ -88,7 +95,7 @@ class FakeCameraServer {
   std::vector<std::unique_ptr<Slot>> slots_;
   std::atomic<double> packet_loss_{0.0};
   std::atomic<bool> backdrop_only_{false};
-  // Start() and Stop() against the watcher of acquisition starts.
+  // Start() and Stop() against the watcher of triggers.
   mutable std::mutex slots_mutex_;
   std::atomic<bool> stop_watching_{false};
   std::thread watcher_;
@@ -99,6 +106,12 @@ class FakeCameraServer {
   std::deque<FrameSet> history_;
   std::atomic<int64_t> images_served_{0};
   std::atomic<int64_t> errors_{0};
+
+  std::mutex render_mutex_;
+  std::condition_variable render_ready_;
+  std::deque<std::packaged_task<cv::Mat()>> render_jobs_;
+  bool stop_rendering_ = false;
+  std::vector<std::thread> render_threads_;  // last: they use the above
 };
 
 }  // namespace shapesense

@@ -1,7 +1,10 @@
 // shapesense-rig-sim: the virtual rig as real GigE Vision cameras (see rig_sim.h).
+#include <malloc.h>
+
 #include <CLI/CLI.hpp>
 #include <csignal>
 #include <iostream>
+#include <opencv2/core/utility.hpp>
 
 #include "libs/core/error.h"
 #include "services/rig_sim/rig_sim.h"
@@ -18,6 +21,18 @@ void OnSignal(int signal) {
     g_control.start_fault_camera = true;
   else
     g_stop = true;
+}
+
+// The cameras' images are rendered several times a second on threads of
+// their own: keep the render buffers (megabytes each) in the heap rather
+// than mapping and faulting them in anew every image, and let OpenCV work in
+// the calling thread rather than oversubscribe the cores with its own pool.
+// Together about a sixth less CPU at 30 Hz (the page faults were most of its
+// system time).
+void TuneForRendering() {
+  mallopt(M_MMAP_THRESHOLD, 64 << 20);
+  mallopt(M_TRIM_THRESHOLD, 512 << 20);
+  cv::setNumThreads(0);
 }
 
 }  // namespace
@@ -38,6 +53,7 @@ int main(int argc, char** argv) {
   app.add_flag("--backdrop-only", args.backdrop_only, "no manipulator, no truth (backgrounds)");
   app.add_option("--write-rig", args.write_rig_path, "write the rig in use to this YAML file");
   CLI11_PARSE(app, argc, argv);
+  TuneForRendering();
   for (const int signal : {SIGINT, SIGTERM, SIGUSR1, SIGUSR2}) std::signal(signal, OnSignal);
   try {
     shapesense::RunRigSim(args, g_stop, &g_control);
