@@ -1,190 +1,125 @@
 #include "clients/tools/demo_command.h"
 
-#include <cmath>
-#include <iomanip>
-#include <map>
-#include <nlohmann/json.hpp>
-#include <numbers>
+#include <unistd.h>
 
-#include "clients/tools/offline_command.h"
+#include <iostream>
+#include <memory>
+
+#include "clients/tools/demo/demo_network.h"
+#include "clients/tools/demo/live_demo.h"
+#include "clients/tools/demo/offline_demo.h"
 #include "libs/core/error.h"
-#include "libs/sim/scene_generators.h"
-#include "runtime/dataset.h"
-#include "runtime/file_io.h"
-#include "runtime/progress.h"
+#include "runtime/lcm/service_loop.h"
 
 namespace shapesense {
-namespace fs = std::filesystem;
 namespace {
 
-constexpr double kBodyLength = 150.0;  // mm
-constexpr double kRadius = 3.0;        // mm
+// Loopback addresses the private namespace gets: one per fake camera, and spare.
+constexpr int kLoopbackAddresses = 8;
 
-std::vector<TapeBand> DemoTapes() {
-  return {TapeBand{40.0, 4.0, {30, 30, 200}}, TapeBand{85.0, 4.0, {30, 30, 200}},
-          TapeBand{125.0, 4.0, {30, 30, 200}}};
+struct DemoCommandArgs {
+  LiveDemoArgs live;
+  bool offline = false;
+  int frames = 16;
+  double voxel_size = 1.0;
+  std::string network = "auto";
+  std::string cameras = "auto";
+  bool no_replay = false;
+};
+
+DemoNetworkMode ParseNetwork(const std::string& network) {
+  if (network == "private") return DemoNetworkMode::kPrivate;
+  if (network == "current") return DemoNetworkMode::kCurrent;
+  return DemoNetworkMode::kAuto;
 }
 
-// Frame i of the demo: the first half bends an arc from straight to 150°
-// while its bending plane turns; the second half runs S-curves.
-TubeScene DemoScene(const Rig& rig, int i, int frames) {
-  const double t = frames > 1 ? static_cast<double>(i) / (frames - 1) : 0.0;
-  const double plane = 2.0 * std::numbers::pi * 0.35 * t;
-  const Vec3 bend(std::cos(plane), std::sin(plane), 0.0);
-  TubeScene scene;
-  scene.radius = kRadius;
-  scene.tapes = DemoTapes();
-  const double degree = std::numbers::pi / 180.0;
-  if (t <= 0.5) {
-    scene.centerline = ArcCenterline(rig.base_point, Vec3::UnitZ(), bend, 10.0, kBodyLength - 10.0,
-                                     300.0 * degree * t);
-  } else {
-    scene.centerline = SCurveCenterline(rig.base_point, Vec3::UnitZ(), bend, kBodyLength / 2,
-                                        (60.0 + 100.0 * (t - 0.5)) * degree, 0.6 * (t - 0.5));
-  }
-  return scene;
-}
-
-nlohmann::json TruthToJson(const std::string& frame, const GroundTruth& truth) {
-  auto points = [](const auto& list) {
-    nlohmann::json out = nlohmann::json::array();
-    for (const Vec3& p : list) out.push_back({p.x(), p.y(), p.z()});
-    return out;
-  };
-  return {{"frame", frame},
-          {"centerline", points(truth.centerline)},
-          {"tip", {truth.tip.x(), truth.tip.y(), truth.tip.z()}},
-          {"markers", points(truth.markers)},
-          {"arc_length", truth.length}};
-}
-
-// Renders the sequence into out/dataset; returns the truth per frame.
-std::map<std::string, GroundTruth> RenderDataset(const DemoArgs& args, const Rig& rig,
-                                                 const fs::path& root) {
-  const RenderOptions render;
-  const SceneRenderer renderer(rig);
-  std::map<std::string, GroundTruth> truths;
-  std::string truth_lines;
-  ProgressBar bar("rendering", args.progress);
-  for (int i = 0; i < args.frames; ++i) {
-    const TubeScene scene = DemoScene(rig, i, args.frames);
-    const std::vector<RenderedView> views =
-        renderer.Render(scene, render, args.seed + static_cast<uint32_t>(i));
-    std::vector<cv::Mat> images;
-    for (const RenderedView& view : views) images.push_back(view.image);
-    if (i == 0) {
-      std::vector<cv::Mat> backgrounds;
-      for (const RenderedView& view : views) backgrounds.push_back(view.background);
-      WriteDatasetHeader(root, rig, backgrounds);
+// GigE needs the namespace's 127.0.0.x addresses; without one, the capture
+// service renders the cameras itself.
+DemoCameras ChooseCameras(const DemoCommandArgs& args, const DemoNetwork& network) {
+  if (args.cameras == "simulated") return DemoCameras::kSimulated;
+  if (args.cameras == "gige") {
+    if (!network.private_namespace && args.network == "auto") {
+      throw InputError("--cameras gige: needs a private network namespace, and " + network.why_not);
     }
-    WriteFrame(root, rig, FrameName(i), images);
-    truths[FrameName(i)] = TruthOf(scene);
-    truth_lines += TruthToJson(FrameName(i), truths[FrameName(i)]).dump() + "\n";
-    bar.Update(static_cast<double>(i + 1) / args.frames);
+    return DemoCameras::kGigE;
   }
-  bar.Finish();
-  WriteFileAtomically(root / "truth.jsonl", truth_lines);
-  return truths;
+  return network.private_namespace ? DemoCameras::kGigE : DemoCameras::kSimulated;
 }
 
-void PrintFrameRow(std::ostream& log, const std::string& frame, const FrameResult& result,
-                   const ShapeError* error) {
-  log << std::setw(7) << frame;
-  if (error == nullptr) {
-    log << "  not measured: " << result.shape.error << '\n';
-    return;
+void RunOffline(const DemoCommandArgs& args) {
+  OfflineDemoArgs offline;
+  offline.out = args.live.out;
+  offline.frames = args.frames;
+  offline.seed = args.live.seed;
+  offline.voxel_size = args.voxel_size;
+  RunOfflineDemo(offline, std::cout);
+}
+
+void RunLive(DemoCommandArgs& args) {
+  // First, while this process has a single thread.
+  const DemoNetwork network = EnterDemoNetwork(ParseNetwork(args.network), kLoopbackAddresses);
+  const std::atomic<bool>& stop = StopFlagOnSignals();
+  LiveDemoArgs& live = args.live;
+  live.cameras = ChooseCameras(args, network);
+  live.network = network.private_namespace ? "private network namespace"
+                                           : "this host's (" + network.why_not + ")";
+  if (!network.private_namespace) {
+    std::cout << "demo: no private network namespace: " << network.why_not
+              << ".\n      Running on this host's network with LCM's host-only default (udpm, "
+                 "ttl=0)"
+              << (live.cameras == DemoCameras::kSimulated
+                      ? ", the cameras rendered inside the capture service (no GigE)"
+                      : "")
+              << ".\n";
   }
-  log << std::fixed << std::setprecision(3) << std::setw(10) << error->centerline_rms
-      << std::setw(10) << error->coverage_rms << std::setw(9) << error->tip << std::setw(9)
-      << error->marker_max << std::setw(6) << error->markers_found << "/" << error->markers_expected
-      << std::setw(10) << result.times.silhouette_ms << std::setw(9) << result.times.carving_ms
-      << std::setw(9) << result.times.shape_ms << '\n';
-}
-
-nlohmann::json SummaryToJson(const DemoReport& report) {
-  const ShapeErrorSummary& a = report.accuracy;
-  return {{"frames", a.frames},
-          {"failed", a.failed},
-          {"centerline_rms_mm", {{"mean", a.mean.centerline_rms}, {"max", a.max.centerline_rms}}},
-          {"coverage_rms_mm", {{"mean", a.mean.coverage_rms}, {"max", a.max.coverage_rms}}},
-          {"tip_error_mm", {{"mean", a.mean.tip}, {"max", a.max.tip}}},
-          {"marker_error_mm", {{"rms_mean", a.mean.marker_rms}, {"max", a.max.marker_max}}},
-          {"markers_found", a.mean.markers_found},
-          {"markers_expected", a.mean.markers_expected},
-          {"stage_ms",
-           {{"silhouette", report.mean_times.silhouette_ms},
-            {"carving", report.mean_times.carving_ms},
-            {"shape", report.mean_times.shape_ms}}},
-          {"table_build_s", report.table_build_s}};
-}
-
-void PrintSummary(std::ostream& log, const DemoReport& report) {
-  const ShapeErrorSummary& a = report.accuracy;
-  log << std::fixed << std::setprecision(3) << "\naccuracy over " << a.frames - a.failed << " of "
-      << a.frames << " frames (mean / max):\n"
-      << "  centreline RMS   " << a.mean.centerline_rms << " / " << a.max.centerline_rms << " mm\n"
-      << "  coverage RMS     " << a.mean.coverage_rms << " / " << a.max.coverage_rms << " mm\n"
-      << "  tip              " << a.mean.tip << " / " << a.max.tip << " mm\n"
-      << "  tape centres     " << a.mean.marker_rms << " / " << a.max.marker_max << " mm ("
-      << a.mean.markers_found << " of " << a.mean.markers_expected << " found)\n"
-      << "stage times (mean): silhouettes " << report.mean_times.silhouette_ms << " ms, carving "
-      << report.mean_times.carving_ms << " ms, shape " << report.mean_times.shape_ms << " ms"
-      << " (lookup table built once in " << std::setprecision(1) << report.table_build_s << " s)\n";
+  live.replay = !args.no_replay;
+  live.progress = isatty(STDOUT_FILENO) ? DemoProgress::kTerminal : DemoProgress::kLines;
+  const LiveDemoReport report = RunLiveDemo(live, stop, std::cout);
+  if (report.interrupted) throw CLI::RuntimeError(130);
 }
 
 }  // namespace
 
-DemoReport RunDemo(const DemoArgs& args, std::ostream& log) {
-  if (args.frames < 1) throw InputError("--frames: expected at least 1");
-  SyntheticRigOptions rig_options;
-  rig_options.seed = args.seed;
-  const Rig rig = MakeSyntheticRig(rig_options);
-  const fs::path dataset = args.out / "dataset";
-  log << "rendering " << args.frames << " frames of a virtual " << rig.cameras.size()
-      << "-camera rig into " << dataset.string() << '\n';
-  const std::map<std::string, GroundTruth> truths = RenderDataset(args, rig, dataset);
-
-  OfflineArgs offline{dataset, args.out / "shapes.jsonl", args.voxel_size, {}, {}, args.progress};
-  fs::create_directories(args.out / "overlays");
-  std::vector<ShapeError> errors;
-  int failed = 0;
-  log << "  frame  cl_rms_mm  cover_mm  tip_mm  mark_mm  tapes  silh_ms  carv_ms  shape_ms\n";
-  const auto observe = [&](const std::string& frame, const std::vector<cv::Mat>& images,
-                           const FrameResult& result) {
-    const GroundTruth& truth = truths.at(frame);
-    if (!result.shape.valid) {
-      ++failed;
-      PrintFrameRow(log, frame, result, nullptr);
-    } else {
-      errors.push_back(CompareShape(result.shape, truth));
-      PrintFrameRow(log, frame, result, &errors.back());
-    }
-    if (!images.empty()) {
-      WritePng(args.out / "overlays" / (frame + ".png"),
-               MakeFrameOverlay(rig, images, result, &truth.centerline));
-    }
-  };
-  const OfflineSummary offline_summary = RunOffline(offline, log, observe);
-  DemoReport report{Summarize(errors, failed), offline_summary.mean_times,
-                    offline_summary.table_build_s};
-  PrintSummary(log, report);
-  WriteFileAtomically(args.out / "report.json", SummaryToJson(report).dump(2) + "\n");
-  log << "wrote " << (args.out / "shapes.jsonl").string() << ", "
-      << (args.out / "overlays").string() << "/*.png, " << (args.out / "report.json").string()
-      << '\n';
-  return report;
-}
-
 void AddDemoCommand(CLI::App& app) {
-  auto args = std::make_shared<DemoArgs>();
+  auto args = std::make_shared<DemoCommandArgs>();
   CLI::App* command = app.add_subcommand(
       "demo",
-      "Render a synthetic sequence on a virtual rig, measure it, and score it against the truth");
-  command->add_option("--out", args->out, "output folder")->capture_default_str();
-  command->add_option("--frames", args->frames, "frames to render")->capture_default_str();
-  command->add_option("--seed", args->seed, "seed of the rig and the noise")->capture_default_str();
-  command->add_option("--voxel-size", args->voxel_size, "voxel edge, mm")->capture_default_str();
-  command->callback([args] { RunDemo(*args, std::cout); });
+      "Run the live pipeline on a virtual rig as separate programs over LCM for a set time; "
+      "print latency per stage and accuracy against the rig's truth; log and replay it");
+  command->add_option("--out", args->live.out, "output folder")->capture_default_str();
+  command->add_option("--duration", args->live.duration_s, "seconds to measure")
+      ->capture_default_str();
+  command->add_option("--rate", args->live.rate_hz, "camera trigger rate, Hz")
+      ->capture_default_str();
+  command->add_option("--seed", args->live.seed, "seed of the rig and the noise")
+      ->capture_default_str();
+  command
+      ->add_option("--network", args->network,
+                   "auto: a private network namespace where possible, else this host's; "
+                   "private: the namespace or fail; current: this process's network")
+      ->check(CLI::IsMember({"auto", "private", "current"}))
+      ->capture_default_str();
+  command
+      ->add_option("--cameras", args->cameras,
+                   "gige: the rig-sim's fake GigE Vision cameras over Aravis; simulated: "
+                   "rendered inside the capture service; auto: gige in a private namespace")
+      ->check(CLI::IsMember({"auto", "gige", "simulated"}))
+      ->capture_default_str();
+  command->add_flag("--no-replay", args->no_replay, "do not replay the log at the end");
+  command->add_flag("--offline", args->offline,
+                    "the old demo instead: render a sequence, measure it in this process, "
+                    "write overlay pictures (no LCM)");
+  command->add_option("--frames", args->frames, "--offline: frames to render")
+      ->capture_default_str();
+  command->add_option("--voxel-size", args->voxel_size, "--offline: voxel edge, mm")
+      ->capture_default_str();
+  command->callback([args] {
+    if (args->offline) {
+      RunOffline(*args);
+    } else {
+      RunLive(*args);
+    }
+  });
 }
 
 }  // namespace shapesense

@@ -1,35 +1,12 @@
 #pragma once
 
 #include <CLI/CLI.hpp>
-#include <filesystem>
-#include <ostream>
-
-#include "libs/evaluation/shape_error.h"
-#include "runtime/sensing_pipeline.h"
 
 namespace shapesense {
 
-struct DemoArgs {
-  std::filesystem::path out = "demo-output";
-  int frames = 16;
-  uint32_t seed = 7;
-  double voxel_size = 1.0;  // mm
-  bool progress = true;
-};
-
-struct DemoReport {
-  ShapeErrorSummary accuracy;
-  StageTimes mean_times;
-  double table_build_s = 0.0;
-};
-
-// Renders a synthetic sequence (arcs bending to 150°, then S-curves) on a
-// virtual three-camera rig into an image-folder dataset, runs the offline
-// chain on it, scores every frame against the ground truth, and writes
-// out/dataset/, out/shapes.jsonl, out/overlays/*.png and out/report.json.
-DemoReport RunDemo(const DemoArgs& args, std::ostream& log);
-
-// Registers `shapesense demo`.
+// Registers `shapesense demo`: the live pipeline on the virtual rig as
+// separate programs (clients/tools/demo/live_demo.h); with --offline, the
+// chain in one process with overlay pictures (clients/tools/demo/offline_demo.h).
 void AddDemoCommand(CLI::App& app);
 
 }  // namespace shapesense

@@ -1,0 +1,157 @@
+#include "clients/tools/demo/demo_plan.h"
+
+#include <algorithm>
+#include <charconv>
+#include <sstream>
+
+#include "runtime/process/private_network.h"
+
+namespace shapesense {
+namespace fs = std::filesystem;
+namespace {
+
+// Every program also gets a --duration well past the demo's end, so that
+// none outlives a demo that was killed outright.
+// The backgrounds are grabbed one camera after another: at least this fast.
+constexpr double kBackgroundRateHz = 30.0;
+
+std::string Backstop(const DemoSettings& settings) {
+  return std::to_string(static_cast<int>(settings.duration_s) + 600);
+}
+
+// The shortest text that reads back as exactly `value`.
+std::string Number(double value) {
+  char text[32];
+  const auto end = std::to_chars(text, text + sizeof(text), value).ptr;
+  return std::string(text, end);
+}
+
+std::string Program(const DemoSettings& settings, const std::string& name) {
+  return (settings.bin_dir / name).string();
+}
+
+// --camera NAME=aravis:127.0.0.<i+1>, one per camera.
+std::vector<std::string> GigECameraFlags(const DemoSettings& settings) {
+  std::vector<std::string> flags;
+  for (size_t i = 0; i < settings.camera_names.size(); ++i) {
+    flags.push_back("--camera");
+    flags.push_back(settings.camera_names[i] + "=aravis:" + LoopbackAddress(static_cast<int>(i)));
+  }
+  return flags;
+}
+
+std::string GigEAddresses(const DemoSettings& settings) {
+  std::string addresses;
+  for (size_t i = 0; i < settings.camera_names.size(); ++i) {
+    if (i > 0) addresses += ',';
+    addresses += LoopbackAddress(static_cast<int>(i));
+  }
+  return addresses;
+}
+
+DemoProcess RigSim(const DemoSettings& settings, const DemoPlan& plan, bool backdrop_only) {
+  DemoProcess process{backdrop_only ? "rig-sim-backdrop" : "rig-sim",
+                      {Program(settings, "shapesense-rig-sim"), "--rig", plan.rig.string(),
+                       "--seed", std::to_string(settings.seed), "--ips", GigEAddresses(settings),
+                       "--lcm-url", settings.lcm_url, "--duration", Backstop(settings)},
+                      "rig-sim: ready",
+                      "",
+                      false};
+  if (backdrop_only) process.argv.push_back("--backdrop-only");
+  return process;
+}
+
+// The cameras of the capture service: flags (GigE) or its config (simulated).
+std::vector<std::string> CaptureCameras(const DemoSettings& settings, const DemoPlan& plan) {
+  if (settings.cameras == DemoCameras::kGigE) return GigECameraFlags(settings);
+  return {"--config", plan.capture_config.string()};
+}
+
+DemoProcess CaptureBackground(const DemoSettings& settings, const DemoPlan& plan) {
+  DemoProcess process{
+      "capture-background", {Program(settings, "shapesense-capture")}, "", "", true};
+  for (const std::string& flag : CaptureCameras(settings, plan)) process.argv.push_back(flag);
+  for (const std::string& arg :
+       {std::string("--rate"), Number(std::max(settings.rate_hz, kBackgroundRateHz)),
+        std::string("background"), std::string("--frames"),
+        std::to_string(settings.background_frames), std::string("--out"),
+        plan.backgrounds.string()}) {
+    process.argv.push_back(arg);
+  }
+  return process;
+}
+
+DemoProcess Capture(const DemoSettings& settings, const DemoPlan& plan) {
+  DemoProcess process{"capture",
+                      {Program(settings, "shapesense-capture"), "--lcm-url", settings.lcm_url,
+                       "--rate", Number(settings.rate_hz), "--duration", Backstop(settings)},
+                      "",
+                      "",
+                      false};
+  for (const std::string& flag : CaptureCameras(settings, plan)) process.argv.push_back(flag);
+  return process;
+}
+
+// The carving and shape services: defaults, the demo's rig and backgrounds.
+DemoProcess Service(const DemoSettings& settings, const DemoPlan& plan, const std::string& name) {
+  return {name,
+          {Program(settings, "shapesense-" + name), "--lcm-url", settings.lcm_url, "--rig",
+           plan.rig.string(), "--backgrounds", plan.backgrounds.string(), "--duration",
+           Backstop(settings)},
+          "",
+          name,
+          false};
+}
+
+DemoProcess Logger(const DemoSettings& settings, const DemoPlan& plan) {
+  return {
+      "lcm-logger",
+      {settings.lcm_logger.string(), "--lcm-url=" + settings.lcm_url, "--force", plan.log.string()},
+      "Opening log file",
+      "",
+      false};
+}
+
+std::string SimulatedCaptureConfig(const DemoSettings& settings, const DemoPlan& plan) {
+  std::ostringstream out;
+  out << "# Written by `shapesense demo`: the virtual rig rendered inside the capture\n"
+         "# service (config/capture.yaml documents every key).\ncameras:\n";
+  for (const std::string& name : settings.camera_names) {
+    out << "  - {name: " << name << ", backend: simulated}\n";
+  }
+  out << "trigger_rate_hz: " << Number(settings.rate_hz) << "\nrig: " << plan.rig.string()
+      << "\nsimulation:\n  seed: " << settings.seed << "\n";
+  return out.str();
+}
+
+}  // namespace
+
+std::string CameraSourceName(DemoCameras cameras) {
+  return cameras == DemoCameras::kGigE ? "gige" : "simulated";
+}
+
+DemoPlan MakeDemoPlan(const DemoSettings& settings) {
+  DemoPlan plan;
+  const fs::path work = settings.out / "setup";
+  plan.rig = work / "rig.yaml";
+  plan.backgrounds = work / "background";
+  plan.log = settings.out / "pipeline.lcm";
+  plan.logs_dir = settings.out / "logs";
+  plan.report = settings.out / "report.json";
+  plan.replay_shapes = settings.out / "replay_shapes.jsonl";
+  const bool gige = settings.cameras == DemoCameras::kGigE;
+  if (!gige) {
+    plan.capture_config = work / "capture.yaml";
+    plan.capture_config_text = SimulatedCaptureConfig(settings, plan);
+  }
+  if (gige) plan.background.push_back(RigSim(settings, plan, true));
+  plan.background.push_back(CaptureBackground(settings, plan));
+  if (gige) plan.pipeline.push_back(RigSim(settings, plan, false));
+  plan.pipeline.push_back(Logger(settings, plan));
+  plan.pipeline.push_back(Service(settings, plan, "carving"));
+  plan.pipeline.push_back(Service(settings, plan, "shape"));
+  plan.pipeline.push_back(Capture(settings, plan));
+  return plan;
+}
+
+}  // namespace shapesense

@@ -1,0 +1,71 @@
+#pragma once
+
+// The live demo's programs and their command lines, worked out before
+// anything starts: a pure function of the settings, so that what the demo
+// runs can be read (and tested) without running it.
+#include <cstdint>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+namespace shapesense {
+
+// Where the camera images come from.
+enum class DemoCameras {
+  kGigE,       // the rig-sim's fake GigE Vision cameras on 127.0.0.x, read over Aravis
+  kSimulated,  // rendered inside the capture process (no GigE, no rig-sim)
+};
+
+std::string CameraSourceName(DemoCameras cameras);  // "gige" | "simulated"
+
+// LCM's default URL (multicast that never leaves the host: ttl=0), with the
+// larger socket buffer that receivers of images need (docs/capture.md). In a
+// private network namespace it stays inside the namespace.
+inline constexpr const char* kDemoLcmUrl = "udpm://239.255.76.67:7667?ttl=0&recv_buf_size=4194304";
+
+struct DemoSettings {
+  std::filesystem::path bin_dir;     // shapesense-rig-sim, -capture, -carving, -shape
+  std::filesystem::path lcm_logger;  // lcm-logger (liblcm-bin)
+  std::filesystem::path out;         // everything the demo writes
+  DemoCameras cameras = DemoCameras::kGigE;
+  std::vector<std::string> camera_names;  // the rig's, in order
+  std::string lcm_url = kDemoLcmUrl;      // every program's
+  double rate_hz = 30.0;                  // software trigger rate
+  double duration_s = 20.0;               // of the measured run
+  uint32_t seed = 7;                      // pixel noise
+  int background_frames = 15;             // per camera, for the median
+};
+
+// One program of the demo.
+struct DemoProcess {
+  std::string name;  // short, for messages and its log file: "rig-sim", "capture", ...
+  std::vector<std::string> argv;
+  // It is up once its output has a line containing `ready_line`, or once its
+  // service status has arrived on LCM (`ready_status`, the service's name);
+  // neither: once started.
+  std::string ready_line;
+  std::string ready_status;
+  // It runs to its end (a one-off job) instead of until the demo stops it.
+  bool runs_to_end = false;
+};
+
+struct DemoPlan {
+  std::filesystem::path rig;             // written by the demo before anything starts
+  std::filesystem::path backgrounds;     // <camera>.png, made by the first phase
+  std::filesystem::path capture_config;  // simulated cameras only (empty otherwise)
+  std::string capture_config_text;
+  std::filesystem::path log;       // the LCM log of the run
+  std::filesystem::path logs_dir;  // one <name>.log per program
+  std::filesystem::path report;
+  std::filesystem::path replay_shapes;  // the replay's JSON lines
+  // Phase 1, the backgrounds: started in order; the last runs to its end.
+  std::vector<DemoProcess> background;
+  // Phase 2, the live pipeline, in start order; stopped in the reverse order
+  // (capture first, so that the last frame-sets drain through before the
+  // services and the logger stop).
+  std::vector<DemoProcess> pipeline;
+};
+
+DemoPlan MakeDemoPlan(const DemoSettings& settings);
+
+}  // namespace shapesense

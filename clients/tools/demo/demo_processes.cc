@@ -1,0 +1,169 @@
+#include "clients/tools/demo/demo_processes.h"
+
+#include <unistd.h>
+
+#include <algorithm>
+#include <cstdlib>
+#include <string_view>
+
+namespace shapesense {
+namespace fs = std::filesystem;
+namespace {
+
+constexpr int kTailLines = 12;
+constexpr auto kStopGrace = std::chrono::milliseconds(10000);
+
+std::string Indented(const std::string& text) {
+  std::string out = "    ";
+  for (const char c : text) {
+    out += c;
+    if (c == '\n') out += "    ";
+  }
+  return out;
+}
+
+std::string WhatToDo(const fs::path& program) {
+  if (program.filename().string().starts_with("shapesense")) {
+    return "build it: bash deploy/build.sh release (or ninja -C <build> " +
+           program.filename().string() + ")";
+  }
+  return "install it: apt-get install liblcm-bin";
+}
+
+std::vector<const DemoProcess*> AllProcesses(const DemoPlan& plan) {
+  std::vector<const DemoProcess*> all;
+  for (const DemoProcess& process : plan.background) all.push_back(&process);
+  for (const DemoProcess& process : plan.pipeline) all.push_back(&process);
+  return all;
+}
+
+}  // namespace
+
+fs::path FindOnPath(const std::string& name) {
+  const char* path = std::getenv("PATH");
+  std::string_view dirs = path != nullptr ? path : "/usr/local/bin:/usr/bin:/bin";
+  while (!dirs.empty()) {
+    const size_t colon = dirs.find(':');
+    fs::path candidate = fs::path(dirs.substr(0, colon)) / name;
+    if (!candidate.parent_path().empty() && access(candidate.c_str(), X_OK) == 0) return candidate;
+    dirs = colon == std::string_view::npos ? std::string_view() : dirs.substr(colon + 1);
+  }
+  return {};
+}
+
+std::vector<std::string> MissingPrograms(const DemoPlan& plan) {
+  std::vector<std::string> missing;
+  for (const DemoProcess* process : AllProcesses(plan)) {
+    const fs::path program = process->argv.front();
+    const std::string line = program.string() + " is missing; " + WhatToDo(program);
+    if (access(program.c_str(), X_OK) != 0 &&
+        std::find(missing.begin(), missing.end(), line) == missing.end()) {
+      missing.push_back(line);
+    }
+  }
+  return missing;
+}
+
+DemoProcesses::DemoProcesses(fs::path logs_dir, const std::atomic<bool>& stop, Hooks hooks)
+    : logs_dir_(std::move(logs_dir)), stop_(stop), hooks_(std::move(hooks)) {
+  fs::create_directories(logs_dir_);
+}
+
+DemoProcesses::~DemoProcesses() { StopAll(); }
+
+void DemoProcesses::Launch(const DemoProcess& process) {
+  ChildOptions options;
+  options.capture_stderr = true;
+  options.log_file = logs_dir_ / (process.name + ".log");
+  options.own_process_group = true;  // Ctrl-C reaches the demo, which stops them in order
+  options.end_with_parent = true;
+  fs::remove(options.log_file);
+  try {
+    running_.push_back({process, std::make_unique<ChildProcess>(process.argv, options)});
+  } catch (const std::runtime_error& e) {
+    throw DemoFailure(process.name, e.what());
+  }
+}
+
+bool DemoProcesses::Start(const DemoProcess& process, std::chrono::seconds timeout) {
+  Launch(process);
+  return WaitUntilUp(process.name, timeout);
+}
+
+DemoProcesses::Running& DemoProcesses::Find(const std::string& name) {
+  const auto found = std::find_if(running_.begin(), running_.end(),
+                                  [&](const Running& r) { return r.process.name == name; });
+  if (found == running_.end()) throw std::logic_error("DemoProcesses: no program " + name);
+  return *found;
+}
+
+bool DemoProcesses::WaitUntilUp(const std::string& name, std::chrono::seconds timeout) {
+  const auto deadline = std::chrono::steady_clock::now() + timeout;
+  while (!IsUp(Find(name))) {
+    if (stop_) return false;
+    if (std::chrono::steady_clock::now() > deadline) {
+      throw Failure(Find(name), "did not come up within " + std::to_string(timeout.count()) + " s");
+    }
+    hooks_.pump(50);
+    ReadOutput();
+  }
+  if (Find(name).process.runs_to_end) Stop(name);  // records how it ended
+  return true;
+}
+
+// Up: its ready line or status seen; a one-off job: ended with status 0.
+bool DemoProcesses::IsUp(Running& running) {
+  ChildProcess& child = *running.child;
+  const DemoProcess& process = running.process;
+  child.ReadAvailable();
+  const std::optional<int> status = child.ExitStatus();
+  if (process.runs_to_end && status && *status == 0) return true;
+  if (status) {
+    child.ReadAvailable();
+    throw Failure(running, DescribeExitStatus(*status) + " while starting");
+  }
+  if (!process.ready_line.empty())
+    return child.output().find(process.ready_line) != std::string::npos;
+  if (!process.ready_status.empty()) return hooks_.status_seen(process.ready_status);
+  return !process.runs_to_end;
+}
+
+void DemoProcesses::ReadOutput() {
+  for (Running& running : running_) running.child->ReadAvailable();
+}
+
+void DemoProcesses::CheckRunning() {
+  for (Running& running : running_) {
+    running.child->ReadAvailable();
+    if (const std::optional<int> status = running.child->ExitStatus()) {
+      throw Failure(running, DescribeExitStatus(*status) + " while the demo ran");
+    }
+  }
+}
+
+ProgramEnd DemoProcesses::Stop(const std::string& name) {
+  const auto found = std::find_if(running_.begin(), running_.end(),
+                                  [&](const Running& r) { return r.process.name == name; });
+  if (found == running_.end()) return {name, "was not running", false};
+  const int status = found->child->Stop(kStopGrace);
+  ProgramEnd end{name, DescribeExitStatus(status), status == 0};
+  running_.erase(found);
+  ends_.push_back(end);
+  return end;
+}
+
+void DemoProcesses::StopAll() {
+  while (!running_.empty()) Stop(running_.back().process.name);
+}
+
+DemoFailure DemoProcesses::Failure(const Running& running, const std::string& what) const {
+  const std::string tail = running.child->Tail(kTailLines);
+  const fs::path log = logs_dir_ / (running.process.name + ".log");
+  return DemoFailure(
+      running.process.name,
+      running.process.name + " (" + running.process.argv.front() + ") " + what +
+          (tail.empty() ? "; it printed nothing" : "; its last output:\n" + Indented(tail)) +
+          "\n  (whole output: " + log.string() + ")");
+}
+
+}  // namespace shapesense

@@ -1,0 +1,200 @@
+// The live demo's plan of programs: for any rig size, rate and duration,
+// every program talks on one LCM URL, the capture service reads exactly the
+// cameras the rig-sim serves (or the simulated cameras of a config the
+// capture service itself accepts), the services use the rig and backgrounds
+// the first phase makes, and no program can outlive the demo.
+#include "clients/tools/demo/demo_plan.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <filesystem>
+#include <fstream>
+#include <random>
+
+#include "services/capture/capture_options.h"
+
+namespace shapesense {
+namespace {
+
+namespace fs = std::filesystem;
+
+// The value after `flag` in `argv`, every time it appears.
+std::vector<std::string> ValuesOf(const std::vector<std::string>& argv, const std::string& flag) {
+  std::vector<std::string> values;
+  for (size_t i = 0; i + 1 < argv.size(); ++i) {
+    if (argv[i] == flag) values.push_back(argv[i + 1]);
+  }
+  return values;
+}
+
+std::string ValueOf(const std::vector<std::string>& argv, const std::string& flag) {
+  const std::vector<std::string> values = ValuesOf(argv, flag);
+  if (values.size() == 1) return values[0];
+  return std::to_string(values.size()) + " values of " + flag;
+}
+
+bool Has(const std::vector<std::string>& argv, const std::string& arg) {
+  return std::find(argv.begin(), argv.end(), arg) != argv.end();
+}
+
+const DemoProcess& Find(const std::vector<DemoProcess>& list, const std::string& name) {
+  const auto found =
+      std::find_if(list.begin(), list.end(), [&](const DemoProcess& p) { return p.name == name; });
+  if (found == list.end()) throw std::runtime_error("no process " + name);
+  return *found;
+}
+
+std::vector<std::string> Names(const std::vector<DemoProcess>& list) {
+  std::vector<std::string> names;
+  names.reserve(list.size());
+  for (const DemoProcess& p : list) names.push_back(p.name);
+  return names;
+}
+
+// Random settings: 1-6 cameras, rates and durations over their range.
+DemoSettings RandomSettings(std::mt19937& random, DemoCameras cameras) {
+  DemoSettings settings;
+  settings.bin_dir = "/opt/shapesense/bin";
+  settings.lcm_logger = "/usr/bin/lcm-logger";
+  settings.out = "/tmp/demo out";  // a space: arguments are never split
+  settings.cameras = cameras;
+  const int count = std::uniform_int_distribution<int>(1, 6)(random);
+  for (int i = 0; i < count; ++i) settings.camera_names.push_back("cam" + std::to_string(i * 3));
+  settings.rate_hz = std::uniform_real_distribution<double>(1.0, 300.0)(random);
+  settings.duration_s = std::uniform_real_distribution<double>(0.5, 3600.0)(random);
+  settings.seed = static_cast<uint32_t>(random());
+  return settings;
+}
+
+// The --camera NAME=aravis:ADDRESS flags as (name, address) pairs.
+std::vector<std::pair<std::string, std::string>> AravisCameras(
+    const std::vector<std::string>& argv) {
+  std::vector<std::pair<std::string, std::string>> cameras;
+  for (const std::string& spec : ValuesOf(argv, "--camera")) {
+    const size_t equals = spec.find("=aravis:");
+    if (equals == std::string::npos) throw std::runtime_error("not aravis: " + spec);
+    cameras.emplace_back(spec.substr(0, equals), spec.substr(equals + 8));
+  }
+  return cameras;
+}
+
+void ExpectEveryProgramEndsByItself(const DemoPlan& plan, const DemoSettings& settings) {
+  for (const auto* list : {&plan.background, &plan.pipeline}) {
+    for (const DemoProcess& p : *list) {
+      if (p.name == "lcm-logger" || p.runs_to_end) continue;  // stopped by the demo or by its job
+      EXPECT_GT(std::stod(ValueOf(p.argv, "--duration")), settings.duration_s + 60.0) << p.name;
+    }
+  }
+}
+
+TEST(DemoPlanTest, GigEPipelineReadsExactlyTheCamerasTheRigSimServes) {
+  std::mt19937 random(11);
+  for (int trial = 0; trial < 20; ++trial) {
+    const DemoSettings settings = RandomSettings(random, DemoCameras::kGigE);
+    const DemoPlan plan = MakeDemoPlan(settings);
+    const DemoProcess& rig_sim = Find(plan.pipeline, "rig-sim");
+    const DemoProcess& capture = Find(plan.pipeline, "capture");
+    std::string addresses;
+    const auto cameras = AravisCameras(capture.argv);
+    ASSERT_EQ(cameras.size(), settings.camera_names.size());
+    for (size_t i = 0; i < cameras.size(); ++i) {
+      EXPECT_EQ(cameras[i].first, settings.camera_names[i]);
+      if (i > 0) addresses += ',';
+      addresses += cameras[i].second;
+    }
+    EXPECT_EQ(ValueOf(rig_sim.argv, "--ips"), addresses);
+    EXPECT_EQ(ValueOf(rig_sim.argv, "--rig"), plan.rig.string());
+    EXPECT_EQ(std::stod(ValueOf(capture.argv, "--rate")), settings.rate_hz);
+    EXPECT_FALSE(Has(rig_sim.argv, "--backdrop-only"));
+    EXPECT_EQ(rig_sim.ready_line, "rig-sim: ready");
+    ExpectEveryProgramEndsByItself(plan, settings);
+  }
+}
+
+TEST(DemoPlanTest, BackgroundsComeFromTheBackdropAloneBeforeThePipeline) {
+  std::mt19937 random(12);
+  for (const DemoCameras cameras : {DemoCameras::kGigE, DemoCameras::kSimulated}) {
+    const DemoSettings settings = RandomSettings(random, cameras);
+    const DemoPlan plan = MakeDemoPlan(settings);
+    ASSERT_FALSE(plan.background.empty());
+    const DemoProcess& job = plan.background.back();
+    EXPECT_TRUE(job.runs_to_end);
+    EXPECT_EQ(ValueOf(job.argv, "--out"), plan.backgrounds.string());
+    EXPECT_TRUE(Has(job.argv, "background"));
+    if (cameras == DemoCameras::kGigE) {
+      EXPECT_TRUE(Has(Find(plan.background, "rig-sim-backdrop").argv, "--backdrop-only"));
+      EXPECT_EQ(AravisCameras(job.argv).size(), settings.camera_names.size());
+    }
+    for (const char* service : {"carving", "shape"}) {
+      const DemoProcess& p = Find(plan.pipeline, service);
+      EXPECT_EQ(ValueOf(p.argv, "--rig"), plan.rig.string());
+      EXPECT_EQ(ValueOf(p.argv, "--backgrounds"), plan.backgrounds.string());
+      EXPECT_EQ(p.ready_status, service) << "up once its status is on LCM";
+    }
+  }
+}
+
+TEST(DemoPlanTest, EveryProgramOnOneUrlAndTheLoggerFirstTheCaptureLast) {
+  std::mt19937 random(13);
+  for (const DemoCameras cameras : {DemoCameras::kGigE, DemoCameras::kSimulated}) {
+    DemoSettings settings = RandomSettings(random, cameras);
+    settings.lcm_url = "udpm://239.255.76.67:7667?ttl=0&recv_buf_size=" + std::to_string(random());
+    const DemoPlan plan = MakeDemoPlan(settings);
+    const std::vector<std::string> names = Names(plan.pipeline);
+    // Recording before any image; stopped (in reverse) after the last shape.
+    EXPECT_LT(std::find(names.begin(), names.end(), "lcm-logger") - names.begin(),
+              std::find(names.begin(), names.end(), "carving") - names.begin());
+    EXPECT_EQ(names.back(), "capture");
+    for (const DemoProcess& p : plan.pipeline) {
+      if (p.name == "lcm-logger") {
+        EXPECT_TRUE(Has(p.argv, "--lcm-url=" + settings.lcm_url));
+        EXPECT_EQ(p.argv.back(), plan.log.string());
+        continue;
+      }
+      EXPECT_EQ(ValueOf(p.argv, "--lcm-url"), settings.lcm_url) << p.name;
+      EXPECT_EQ(fs::path(p.argv.front()).parent_path(), settings.bin_dir) << p.name;
+    }
+  }
+}
+
+TEST(DemoPlanTest, SimulatedCamerasNeedNoRigSimAndTheirConfigIsValid) {
+  std::mt19937 random(14);
+  const fs::path dir = fs::path(::testing::TempDir()) / "demo_plan_test";
+  fs::create_directories(dir);
+  for (int trial = 0; trial < 10; ++trial) {
+    const DemoSettings settings = RandomSettings(random, DemoCameras::kSimulated);
+    const DemoPlan plan = MakeDemoPlan(settings);
+    for (const auto* list : {&plan.background, &plan.pipeline}) {
+      for (const DemoProcess& p : *list) EXPECT_EQ(p.name.find("rig-sim"), std::string::npos);
+    }
+    EXPECT_EQ(ValueOf(Find(plan.pipeline, "capture").argv, "--config"),
+              plan.capture_config.string());
+    const fs::path config = dir / "capture.yaml";
+    std::ofstream(config) << plan.capture_config_text;
+    const CaptureServiceOptions options = LoadCaptureOptions(config.string(), {});
+    ASSERT_EQ(options.cameras.size(), settings.camera_names.size());
+    for (size_t i = 0; i < options.cameras.size(); ++i) {
+      EXPECT_EQ(options.cameras[i].name, settings.camera_names[i]);
+      EXPECT_EQ(options.cameras[i].backend, "simulated");
+    }
+    EXPECT_EQ(options.rig, plan.rig.string());
+    EXPECT_EQ(options.trigger_rate_hz, settings.rate_hz);
+    EXPECT_EQ(options.simulation.seed, settings.seed);
+  }
+  fs::remove_all(dir);
+}
+
+TEST(DemoPlanTest, OutputsStayInTheOutputFolder) {
+  std::mt19937 random(15);
+  const DemoSettings settings = RandomSettings(random, DemoCameras::kGigE);
+  const DemoPlan plan = MakeDemoPlan(settings);
+  for (const fs::path& path :
+       {plan.rig, plan.backgrounds, plan.log, plan.logs_dir, plan.report, plan.replay_shapes}) {
+    const std::string relative = fs::relative(path, settings.out).string();
+    EXPECT_FALSE(relative.starts_with("..")) << path;
+  }
+}
+
+}  // namespace
+}  // namespace shapesense
