@@ -16,14 +16,5 @@ fi
 bash "$ROOT/deploy/install-deps.sh"
 bash "$ROOT/deploy/build.sh" release
 
-# Receivers of camera images ask for 4 MB socket buffers (docs/capture.md);
-# the kernel's default cap (208 KB) would lose images.
-WANTED=4194304
-if [ "$(cat /proc/sys/net/core/rmem_max)" -lt "$WANTED" ]; then
-  SUDO=""
-  if [ "$(id -u)" -ne 0 ]; then SUDO="sudo"; fi
-  echo "demo: raising net.core.rmem_max to $WANTED (socket buffers for camera images)"
-  $SUDO sysctl -q -w net.core.rmem_max="$WANTED" || echo "demo: could not; expect lost frame-sets"
-fi
-
+bash "$ROOT/deploy/socket-buffers.sh"
 "$ROOT/build/bin/shapesense" demo --out "$OUT" "$@"

@@ -4,6 +4,7 @@
 set -euo pipefail
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 bash "$ROOT/deploy/install-deps.sh"
+bash "$ROOT/deploy/socket-buffers.sh"   # the multi-process tests carry camera images over LCM
 
 bash "$ROOT/deploy/build.sh" release
 (cd "$ROOT/build" && ctest --output-on-failure -j 2)
