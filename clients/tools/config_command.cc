@@ -3,8 +3,8 @@
 #include <iostream>
 
 #include "libs/config/options_yaml.h"
-#include "libs/sim/tube_scene.h"
 #include "libs/control/control_options.h"
+#include "libs/sim/tube_scene.h"
 #include "runtime/sensing_pipeline.h"
 
 namespace shapesense {
@@ -32,7 +32,8 @@ void AddConfigCommand(CLI::App& app) {
   command->callback([component] {
     const std::string text = DocumentedDefaults(*component);
     if (text.empty())
-      throw CLI::ValidationError("component", "unknown: " + *component + " (pipeline | render | controller)");
+      throw CLI::ValidationError("component",
+                                 "unknown: " + *component + " (pipeline | render | controller)");
     std::cout << text;
   });
 }

@@ -315,8 +315,8 @@ TEST(CalibrateCommandTest, TheExecutableExitsNonZeroOnBadInput) {
   TempDir dir;
   WriteImage(dir.path / "no_board" / "v0.png", cv::Mat(480, 640, CV_8UC3, cv::Scalar(90, 90, 90)));
   const fs::path out = dir.path / "cam.yaml";
-  const std::string command = std::string(SHAPESENSE_BINARY) +
-                              " calibrate intrinsics --images " + (dir.path / "no_board").string() +
+  const std::string command = std::string(SHAPESENSE_BINARY) + " calibrate intrinsics --images " +
+                              (dir.path / "no_board").string() +
                               " --cols 9 --rows 6 --square 25 --out " + out.string() + " 2> " +
                               (dir.path / "stderr.txt").string();
   const int status = std::system(command.c_str());
