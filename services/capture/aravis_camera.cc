@@ -13,27 +13,19 @@
 #include <vector>
 
 #include "services/capture/aravis_trigger_matcher.h"
+#include "services/capture/genicam_pixel_formats.h"
 
 namespace shapesense {
 namespace {
 
-// GenICam PFNC codes, as Aravis's ARV_PIXEL_FORMAT_* (whose macros are C casts).
-constexpr uint32_t kMono8 = 0x01080001u;
-constexpr uint32_t kBayerGr8 = 0x01080008u;
-constexpr uint32_t kBayerRg8 = 0x01080009u;
-constexpr uint32_t kBayerGb8 = 0x0108000au;
-constexpr uint32_t kBayerBg8 = 0x0108000bu;
-constexpr uint32_t kRgb8 = 0x02180014u;
-constexpr uint32_t kBgr8 = 0x02180015u;
-
 constexpr std::array<std::pair<const char*, uint32_t>, 7> kPixelFormats = {{
-    {"Mono8", kMono8},
-    {"RGB8", kRgb8},
-    {"BGR8", kBgr8},
-    {"BayerRG8", kBayerRg8},
-    {"BayerGR8", kBayerGr8},
-    {"BayerGB8", kBayerGb8},
-    {"BayerBG8", kBayerBg8},
+    {"Mono8", genicam::kMono8},
+    {"RGB8", genicam::kRgb8},
+    {"BGR8", genicam::kBgr8},
+    {"BayerRG8", genicam::kBayerRg8},
+    {"BayerGR8", genicam::kBayerGr8},
+    {"BayerGB8", genicam::kBayerGb8},
+    {"BayerBG8", genicam::kBayerBg8},
 }};
 
 // After this long without a frame, a timeout asks the device whether it is
@@ -49,13 +41,13 @@ int64_t HostUtime() { return g_get_real_time(); }
 // GenICam by the first row's first two: GenICam RG is OpenCV BG, and so on.
 int BayerConversion(uint32_t pixel_format) {
   switch (pixel_format) {
-    case kBayerRg8:
+    case genicam::kBayerRg8:
       return cv::COLOR_BayerBG2BGR;
-    case kBayerGr8:
+    case genicam::kBayerGr8:
       return cv::COLOR_BayerGB2BGR;
-    case kBayerGb8:
+    case genicam::kBayerGb8:
       return cv::COLOR_BayerGR2BGR;
-    case kBayerBg8:
+    case genicam::kBayerBg8:
       return cv::COLOR_BayerRG2BGR;
     default:
       return -1;
@@ -422,14 +414,14 @@ std::unique_ptr<CameraBackend> MakeAravisCamera(const CameraConfig& config) {
 cv::Mat DecodeAravisImage(uint32_t pixel_format, const void* data, size_t size, int width,
                           int height) {
   const int bayer = BayerConversion(pixel_format);
-  const bool colour = pixel_format == kRgb8 || pixel_format == kBgr8;
+  const bool colour = pixel_format == genicam::kRgb8 || pixel_format == genicam::kBgr8;
   if (data == nullptr || width <= 0 || height <= 0) return {};
-  if (!colour && pixel_format != kMono8 && bayer < 0) return {};
+  if (!colour && pixel_format != genicam::kMono8 && bayer < 0) return {};
   if (size < static_cast<size_t>(width) * height * (colour ? 3 : 1)) return {};
   // A view of the buffer (not written); every branch copies out of it.
   const cv::Mat raw(height, width, colour ? CV_8UC3 : CV_8UC1, const_cast<void*>(data));
   cv::Mat image;
-  if (pixel_format == kRgb8)
+  if (pixel_format == genicam::kRgb8)
     cv::cvtColor(raw, image, cv::COLOR_RGB2BGR);
   else if (bayer >= 0)
     cv::cvtColor(raw, image, bayer);

@@ -57,7 +57,9 @@ void CarvingService::OnImage(image_t&& image, int64_t receive_utime) {
     status_.Note(error);
     return;
   }
-  const std::string source = image.camera + " (trigger " + std::to_string(image.trigger_seq) + ")";
+  // Kept for the note on a rejection (the image moves into the assembler).
+  const std::string camera = image.camera;
+  const int64_t trigger_seq = image.trigger_seq;
   const int64_t dropped_before = assembler_.counters().DroppedSets();
   AssemblyResult result = assembler_.Add(std::move(image), receive_utime);
   CountAssemblyDrops(dropped_before);
@@ -65,7 +67,8 @@ void CarvingService::OnImage(image_t&& image, int64_t receive_utime) {
     worker_.Push(std::move(*result.completed));
   } else if (result.outcome != AssemblyOutcome::kPending) {
     status_.Rejected();
-    status_.Note(source + ": " + AssemblyOutcomeName(result.outcome));
+    status_.Note(camera + ": " + AssemblyOutcomeName(result.outcome) + " (trigger " +
+                 std::to_string(trigger_seq) + ")");
   }
 }
 

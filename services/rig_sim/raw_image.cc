@@ -2,18 +2,10 @@
 
 #include <opencv2/imgproc.hpp>
 
+#include "services/capture/genicam_pixel_formats.h"
+
 namespace shapesense {
 namespace {
-
-// GenICam PFNC codes (as Aravis's ARV_PIXEL_FORMAT_*).
-constexpr uint32_t kMono8 = 0x01080001u;
-constexpr uint32_t kMono16 = 0x01100007u;
-constexpr uint32_t kBayerGr8 = 0x01080008u;
-constexpr uint32_t kBayerRg8 = 0x01080009u;
-constexpr uint32_t kBayerGb8 = 0x0108000au;
-constexpr uint32_t kBayerBg8 = 0x0108000bu;
-constexpr uint32_t kRgb8 = 0x02180014u;
-constexpr uint32_t kBgr8 = 0x02180015u;
 
 // The 2x2 Bayer tile, row by row, as BGR channel indices; nullptr when not Bayer.
 const int* BayerTile(uint32_t pixel_format) {
@@ -22,13 +14,13 @@ const int* BayerTile(uint32_t pixel_format) {
   static constexpr int kGb[4] = {1, 0, 2, 1};
   static constexpr int kBg[4] = {0, 1, 1, 2};
   switch (pixel_format) {
-    case kBayerRg8:
+    case genicam::kBayerRg8:
       return kRg;
-    case kBayerGr8:
+    case genicam::kBayerGr8:
       return kGr;
-    case kBayerGb8:
+    case genicam::kBayerGb8:
       return kGb;
-    case kBayerBg8:
+    case genicam::kBayerBg8:
       return kBg;
     default:
       return nullptr;
@@ -47,9 +39,9 @@ void Mosaic(const cv::Mat& bgr, const int* tile, uint8_t* out) {
 }  // namespace
 
 int RawBytesPerPixel(uint32_t pixel_format) {
-  if (pixel_format == kRgb8 || pixel_format == kBgr8) return 3;
-  if (pixel_format == kMono16) return 2;
-  if (pixel_format == kMono8 || BayerTile(pixel_format) != nullptr) return 1;
+  if (pixel_format == genicam::kRgb8 || pixel_format == genicam::kBgr8) return 3;
+  if (pixel_format == genicam::kMono16) return 2;
+  if (pixel_format == genicam::kMono8 || BayerTile(pixel_format) != nullptr) return 1;
   return 0;
 }
 
@@ -64,11 +56,11 @@ bool EncodeRawImage(const cv::Mat& bgr, uint32_t pixel_format, int width, int he
     Mosaic(image, tile, out);
     return true;
   }
-  if (pixel_format == kBgr8) {
+  if (pixel_format == genicam::kBgr8) {
     image.copyTo(cv::Mat(height, width, CV_8UC3, out));
-  } else if (pixel_format == kRgb8) {
+  } else if (pixel_format == genicam::kRgb8) {
     cv::cvtColor(image, cv::Mat(height, width, CV_8UC3, out), cv::COLOR_BGR2RGB);
-  } else if (pixel_format == kMono8) {
+  } else if (pixel_format == genicam::kMono8) {
     cv::cvtColor(image, cv::Mat(height, width, CV_8UC1, out), cv::COLOR_BGR2GRAY);
   } else {
     cv::Mat grey;

@@ -171,6 +171,17 @@ CanFrame SdoFrame(uint32_t cob_id, const SdoMessage& message) {
   return frame;
 }
 
+namespace {
+
+// An abort looks the same in both directions: the address and a 4-byte code.
+SdoMessage ParseSdoAbort(const CanFrame& frame) {
+  SdoMessage abort = Addressed(frame, SdoMessage::Kind::kAbort);
+  abort.value = GetLittleEndian(frame, 4, 4);
+  return abort;
+}
+
+}  // namespace
+
 SdoMessage ParseSdoRequest(const CanFrame& frame) {
   using Kind = SdoMessage::Kind;
   if (frame.size != 8) return {};
@@ -179,11 +190,8 @@ SdoMessage ParseSdoRequest(const CanFrame& frame) {
       return WithData(frame, Kind::kDownloadRequest);
     case 2:
       return Addressed(frame, Kind::kUploadRequest);
-    case 4: {
-      SdoMessage abort = Addressed(frame, Kind::kAbort);
-      abort.value = GetLittleEndian(frame, 4, 4);
-      return abort;
-    }
+    case 4:
+      return ParseSdoAbort(frame);
     default:
       return {};
   }
@@ -197,11 +205,8 @@ SdoMessage ParseSdoResponse(const CanFrame& frame) {
       return Addressed(frame, Kind::kDownloadResponse);
     case 2:
       return WithData(frame, Kind::kUploadResponse);
-    case 4: {
-      SdoMessage abort = Addressed(frame, Kind::kAbort);
-      abort.value = GetLittleEndian(frame, 4, 4);
-      return abort;
-    }
+    case 4:
+      return ParseSdoAbort(frame);
     default:
       return {};
   }
