@@ -10,6 +10,7 @@
 #include <stdexcept>
 
 #include "libs/control/tip_solver.h"
+#include "libs/core/csv_fields.h"
 #include "libs/core/error.h"
 
 namespace shapesense {
@@ -90,21 +91,6 @@ bool InterpolationFromYaml(const YAML::Node& node, const std::string& source) {
 }
 
 // ---- CSV ----
-
-std::string Trim(const std::string& text) {
-  const size_t begin = text.find_first_not_of(" \t\r");
-  if (begin == std::string::npos) return "";
-  return text.substr(begin, text.find_last_not_of(" \t\r") - begin + 1);
-}
-
-std::vector<std::string> SplitFields(const std::string& line) {
-  std::vector<std::string> fields;
-  std::stringstream stream(line);
-  std::string field;
-  while (std::getline(stream, field, ',')) fields.push_back(Trim(field));
-  if (!line.empty() && line.back() == ',') fields.push_back("");
-  return fields;
-}
 
 const std::vector<std::string> kConfigurationColumns = {"time", "kappa_x", "kappa_z", "eps0",
                                                         "eps1"};
@@ -204,9 +190,9 @@ Trajectory ParseTrajectoryCsv(const std::string& text, const std::string& source
   Trajectory trajectory;
   std::vector<std::string> where;
   for (int number = 1; std::getline(stream, line); ++number) {
-    const std::string trimmed = Trim(line);
+    const std::string trimmed = TrimBlanks(line);
     if (trimmed.empty() || trimmed[0] == '#') continue;
-    const std::vector<std::string> fields = SplitFields(trimmed);
+    const std::vector<std::string> fields = SplitCsvFields(trimmed);
     const std::string here = "line " + std::to_string(number);
     if (order.empty()) {
       order = ColumnOrder(fields, kConfigurationColumns);

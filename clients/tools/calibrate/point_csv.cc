@@ -4,23 +4,11 @@
 #include <optional>
 #include <sstream>
 
+#include "libs/core/csv_fields.h"
 #include "libs/core/error.h"
 
 namespace shapesense {
 namespace {
-
-std::string Trim(const std::string& text) {
-  const size_t first = text.find_first_not_of(" \t\r");
-  if (first == std::string::npos) return "";
-  return text.substr(first, text.find_last_not_of(" \t\r") - first + 1);
-}
-
-std::vector<std::string> SplitFields(const std::string& line) {
-  std::vector<std::string> fields;
-  std::stringstream stream(line);
-  for (std::string field; std::getline(stream, field, ',');) fields.push_back(Trim(field));
-  return fields;
-}
 
 std::optional<double> ParseNumber(const std::string& text) {
   if (text.empty()) return std::nullopt;
@@ -56,9 +44,9 @@ std::vector<NamedPoint> ParsePointCsv(const std::string& text, const std::string
   bool first_content = true;
   for (std::string line; std::getline(stream, line);) {
     ++line_number;
-    line = Trim(line);
+    line = TrimBlanks(line);
     if (line.empty() || line[0] == '#') continue;
-    const std::vector<std::string> fields = SplitFields(line);
+    const std::vector<std::string> fields = SplitCsvFields(line);
     const std::string where = source + ":" + std::to_string(line_number);
     if (fields.size() != 3 && fields.size() != 4) {
       throw InputError(where + ": expected x,y,z or name,x,y,z (mm), got " +

@@ -6,25 +6,11 @@
 #include <map>
 #include <sstream>
 
+#include "libs/core/csv_fields.h"
 #include "libs/core/error.h"
 
 namespace shapesense {
 namespace {
-
-std::string Trim(const std::string& text) {
-  const size_t begin = text.find_first_not_of(" \t\r");
-  if (begin == std::string::npos) return "";
-  return text.substr(begin, text.find_last_not_of(" \t\r") - begin + 1);
-}
-
-std::vector<std::string> SplitFields(const std::string& line) {
-  std::vector<std::string> fields;
-  std::stringstream stream(line);
-  std::string field;
-  while (std::getline(stream, field, ',')) fields.push_back(Trim(field));
-  if (!line.empty() && line.back() == ',') fields.push_back("");
-  return fields;
-}
 
 struct NumberedLine {
   int number;  // 1-based line of the file
@@ -37,7 +23,7 @@ std::vector<NumberedLine> ContentLines(const std::string& text) {
   std::stringstream stream(text);
   std::string line;
   for (int number = 1; std::getline(stream, line); ++number) {
-    const std::string trimmed = Trim(line);
+    const std::string trimmed = TrimBlanks(line);
     if (!trimmed.empty() && trimmed.front() != '#') lines.push_back({number, trimmed});
   }
   return lines;
@@ -75,7 +61,7 @@ std::map<std::string, int> ParseHeader(const NumberedLine& header, const std::st
                                        int num_tendons, bool with_tensions) {
   const std::string where = "line " + std::to_string(header.number) + " (header)";
   std::map<std::string, int> columns;
-  const std::vector<std::string> names = SplitFields(header.text);
+  const std::vector<std::string> names = SplitCsvFields(header.text);
   for (size_t i = 0; i < names.size(); ++i) {
     if (!columns.emplace(names[i], static_cast<int>(i)).second) {
       throw InputError(DescribeInputError(source, where, "column '" + names[i] + "' repeats"));
@@ -107,7 +93,7 @@ double ParseNumber(const std::string& field, const std::string& source, const st
 PoseSample ParsePose(const NumberedLine& line, const std::map<std::string, int>& columns,
                      const std::string& source, int num_tendons, bool with_tensions) {
   const std::string where = "line " + std::to_string(line.number);
-  const std::vector<std::string> fields = SplitFields(line.text);
+  const std::vector<std::string> fields = SplitCsvFields(line.text);
   if (fields.size() != columns.size()) {
     throw InputError(DescribeInputError(source, where,
                                         "expected " + std::to_string(columns.size()) +
