@@ -248,8 +248,12 @@ FrameSet FakeCameraServer::Assign(int camera, int64_t trigger_utime) {
   set.seq = slot.seq;
   set.trigger_utime = slot.first_utime;
   set.t_seconds = static_cast<double>(slot.first_utime - origin_utime_) * 1e-6;
-  set.pose = PoseAt(trajectory_, set.t_seconds);
-  set.scene = std::make_shared<const TubeScene>(SceneOf(trajectory_, rig_, set.pose));
+  if (plant_ != nullptr) {
+    set.scene = std::make_shared<const TubeScene>(plant_->SceneAtUtime(slot.first_utime));
+  } else {
+    set.pose = PoseAt(trajectory_, set.t_seconds);
+    set.scene = std::make_shared<const TubeScene>(SceneOf(trajectory_, rig_, set.pose));
+  }
   new_sets_.push_back(set);
   history_.push_back(set);
   if (new_sets_.size() > kKeptFrameSets) new_sets_.pop_front();

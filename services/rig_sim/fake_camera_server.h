@@ -6,7 +6,8 @@
 // image is made when it is triggered: the frame-set it belongs to is chosen
 // by a FrameSetClock from the time its trigger arrived (a watcher thread
 // sees each camera's trigger register flip), the set's scene is the
-// trajectory at the time the set's first trigger arrived, and each camera
+// trajectory (or, in plant mode, the plant: plant_world.h) at the time the
+// set's first trigger arrived, and each camera
 // renders its own view of it (in its own thread, with its own SceneRenderer)
 // in the pixel format the client set. The image's timestamp is its
 // trigger's arrival, its exposure, whenever the camera's thread got to it.
@@ -26,6 +27,7 @@
 #include "libs/camera/camera.h"
 #include "libs/sim/tube_scene.h"
 #include "services/rig_sim/frame_set_clock.h"
+#include "services/rig_sim/plant_world.h"
 #include "services/rig_sim/trajectory.h"
 
 namespace shapesense {
@@ -34,7 +36,7 @@ struct FrameSet {
   int64_t seq = 0;
   int64_t trigger_utime = 0;  // the set's first trigger, µs since epoch
   double t_seconds = 0.0;     // trajectory time of its scene
-  TrajectoryPose pose;
+  TrajectoryPose pose;        // the trajectory's (not set in plant mode)
   std::shared_ptr<const TubeScene> scene;
 };
 
@@ -63,6 +65,9 @@ class FakeCameraServer {
   void SetPacketLoss(double ratio);
   // Show the backdrop alone (no manipulator); frame-sets are still counted.
   void SetBackdropOnly(bool backdrop_only) { backdrop_only_ = backdrop_only; }
+  // Plant mode: every frame-set shows the plant at its trigger time instead
+  // of the trajectory (its scene carries the plant's q). Before any Start().
+  void SetPlant(std::shared_ptr<PlantWorld> plant) { plant_ = std::move(plant); }
 
   // Frame-sets opened since the last call, oldest first (at most 1000 kept).
   std::vector<FrameSet> TakeNewFrameSets();
@@ -92,6 +97,7 @@ class FakeCameraServer {
   const TrajectoryOptions trajectory_;
   const uint32_t seed_;
   const int64_t origin_utime_;
+  std::shared_ptr<PlantWorld> plant_;  // plant mode; null: the trajectory
   std::vector<std::unique_ptr<Slot>> slots_;
   std::atomic<double> packet_loss_{0.0};
   std::atomic<bool> backdrop_only_{false};

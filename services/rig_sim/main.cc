@@ -43,6 +43,8 @@ int main(int argc, char** argv) {
   app.add_option("--rig", args.rig_path, "rig YAML (default: a synthetic 3-camera rig)");
   app.add_option("--seed", args.seed, "synthetic rig and pixel noise seed");
   app.add_option("--trajectory", args.trajectory_path, "trajectory YAML (config/rig_sim.yaml)");
+  app.add_option("--plant", args.plant_path,
+                 "plant mode: the controller drives the manipulator (config/rig_plant.yaml)");
   app.add_option("--ips", args.ips, "one address per camera (default 127.0.0.1,127.0.0.2,...)")
       ->delimiter(',');
   app.add_option("--packet-loss", args.packet_loss, "fraction of stream packets dropped (0-1)");

@@ -2,6 +2,8 @@
 
 #include <chrono>
 #include <iostream>
+#include <memory>
+#include <optional>
 #include <thread>
 
 #include "libs/camera/rig_yaml.h"
@@ -26,6 +28,7 @@ struct Setup {
   std::vector<std::string> addresses;
   std::vector<Outage> outages;
   int fault_camera = 0;
+  std::optional<PlantWorldSetup> plant;
 };
 
 Rig LoadRig(const RigSimArgs& args) {
@@ -65,7 +68,9 @@ Setup LoadSetup(const RigSimArgs& args) {
   if (!(args.duration_s >= 0.0)) {
     throw InputError("--duration: expected seconds >= 0, got " + std::to_string(args.duration_s));
   }
-  Setup setup{LoadRig(args), LoadOptionsFile<TrajectoryOptions>(args.trajectory_path), {}, {}, 0};
+  Setup setup{LoadRig(args), LoadOptionsFile<TrajectoryOptions>(args.trajectory_path), {}, {}, 0,
+              std::nullopt};
+  if (!args.plant_path.empty()) setup.plant = LoadPlantWorldSetup(args.plant_path);
   if (const std::string error = setup.rig.Validate(); !error.empty()) {
     throw InputError((args.rig_path.empty() ? "synthetic rig" : args.rig_path) + ": " + error);
   }
@@ -82,12 +87,19 @@ Setup LoadSetup(const RigSimArgs& args) {
   return setup;
 }
 
+// The truth of a frame-set: the trajectory's, or in plant mode the plant's (with q).
+shape_t TruthOf(const FrameSet& set, const PlantWorld* plant, int64_t seq) {
+  if (plant != nullptr) {
+    return plant->TruthMessage(*set.scene, set.seq, set.trigger_utime, seq, NowUtime());
+  }
+  return FrameSetTruth(*set.scene, set.pose, set.seq, set.trigger_utime, seq, NowUtime());
+}
+
 void PublishTruth(FakeCameraServer& server, LcmBus& bus, ServiceStatus& status, int64_t* seq,
-                  bool backdrop_only) {
+                  bool backdrop_only, const PlantWorld* plant) {
   for (const FrameSet& set : server.TakeNewFrameSets()) {
     if (backdrop_only) continue;  // nothing to measure
-    const shape_t truth =
-        FrameSetTruth(*set.scene, set.pose, set.seq, set.trigger_utime, (*seq)++, NowUtime());
+    const shape_t truth = TruthOf(set, plant, (*seq)++);
     if (bus.Publish(channels::kTruth, truth)) {
       status.Published();
     } else {
@@ -146,6 +158,36 @@ void CountImages(const FakeCameraServer& server, ServiceStatus& status, int64_t*
   }
 }
 
+// Plant mode: the plant's commands in, its state out, through the link.
+class PlantMode {
+ public:
+  PlantMode(const PlantWorldSetup& setup, LcmBus& bus)
+      : world_(std::make_shared<PlantWorld>(setup)), link_(bus, *world_) {
+    std::cout << "rig-sim: plant mode: " << world_->num_tendons() << " tendons on "
+              << channels::kPlantCommand << ", state on " << channels::kPlantState << std::endl;
+  }
+  const std::shared_ptr<PlantWorld>& world() const { return world_; }
+
+  // Hands over what came, advances the plant and publishes its state when due.
+  void Poll(LcmBus& bus, ServiceStatus& status, int64_t now) {
+    // At most a loop's worth of messages: the callbacks only queue.
+    for (int i = 0; i < kMaxMessagesPerPoll && bus.Handle(0) > 0; ++i) {
+    }
+    const PlantPoll poll = link_.Poll(now);
+    status.Received(poll.accepted);
+    if (!poll.rejections.empty()) {
+      status.Rejected(static_cast<int64_t>(poll.rejections.size()));
+      status.Note("plant command rejected: " + poll.rejections.back());
+    }
+    if (poll.dropped > 0) status.Dropped(poll.dropped);
+  }
+
+ private:
+  static constexpr int kMaxMessagesPerPoll = 64;
+  std::shared_ptr<PlantWorld> world_;
+  PlantLink link_;
+};
+
 void StartCameras(FakeCameraServer& server, const Setup& setup) {
   for (int i = 0; i < server.num_cameras(); ++i) {
     server.Start(i);
@@ -182,23 +224,28 @@ void RunRigSim(const RigSimArgs& args, const std::atomic<bool>& stop, RigSimCont
   LcmBus bus(args.lcm_url);
   ServiceStatus status("rig_sim");
   const int64_t start_utime = NowUtime();
+  std::optional<PlantMode> plant;
+  if (setup.plant) plant.emplace(*setup.plant, bus);
+  const PlantWorld* plant_world = plant ? plant->world().get() : nullptr;
   FakeCameraServer server(setup.rig, setup.trajectory, setup.addresses, args.seed, start_utime);
   server.SetPacketLoss(args.packet_loss);
   server.SetBackdropOnly(args.backdrop_only);
+  if (plant) server.SetPlant(plant->world());
   StartCameras(server, setup);
   int64_t truth_seq = 0, images = 0, errors = 0;
   while (!stop) {
     const int64_t now = NowUtime();
     const double t = static_cast<double>(now - start_utime) * 1e-6;
     if (args.duration_s > 0.0 && t >= args.duration_s) break;
-    PublishTruth(server, bus, status, &truth_seq, args.backdrop_only);
+    if (plant) plant->Poll(bus, status, now);
+    PublishTruth(server, bus, status, &truth_seq, args.backdrop_only, plant_world);
     ApplyOutages(server, setup, t);
     ApplyControl(server, setup, control);
     CountImages(server, status, &images, &errors);
     status.MaybePublish(bus, now);
     std::this_thread::sleep_for(kLoopPeriod);
   }
-  PublishTruth(server, bus, status, &truth_seq, args.backdrop_only);
+  PublishTruth(server, bus, status, &truth_seq, args.backdrop_only, plant_world);
 }
 
 }  // namespace shapesense

@@ -8,6 +8,10 @@
 // out on channels::kTruth (shape_t, frame_set_truth.h); status at 1 Hz on
 // channels::Status("rig_sim").
 //
+// Plant mode (--plant, plant_world.h): the manipulator is the tendon plant
+// the controller drives over channels::kPlantCommand, its actuators
+// published on channels::kPlantState; the truth carries the plant's q.
+//
 // Faults for tests: a ratio of lost stream packets (--packet-loss), and a
 // camera taken off the network and brought back, on a schedule (--outage) or
 // on request (SIGUSR1 stops the fault camera, SIGUSR2 starts it again).
@@ -25,6 +29,8 @@ struct RigSimArgs {
   std::string rig_path;         // rig YAML; empty: MakeSyntheticRig with `seed`
   uint32_t seed = 0;            // synthetic rig jitter and pixel noise
   std::string trajectory_path;  // TrajectoryOptions YAML; empty: the defaults
+  // PlantWorldOptions YAML (config/rig_plant.yaml): plant mode; empty: the trajectory.
+  std::string plant_path;
   // One address per camera, in rig order; empty: 127.0.0.1, 127.0.0.2, ...
   std::vector<std::string> ips;
   double packet_loss = 0.0;  // fraction of GigE stream packets dropped (0-1)
