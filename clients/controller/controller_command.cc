@@ -15,21 +15,37 @@ namespace {
 
 constexpr const char* kName = "shapesense-controller";
 
+// The command line as given; an override counts only when its option was given.
 struct CommandLine {
   std::filesystem::path config;
-  ControllerOverrides overrides;
+  std::string targets, lcm_url, csv, lcm, mode;
+  double duration = 0.0;
 };
 
-void AddOptions(CLI::App& app, CommandLine& line, std::string& targets, std::string& lcm_url,
-                std::string& csv, std::string& lcm, double& duration) {
+void AddOptions(CLI::App& app, CommandLine& line) {
   app.add_option("--config", line.config,
                  "controller client config (config/controller_client.yaml)")
       ->required();
-  app.add_option("--targets", targets, "trajectory file (.csv or YAML) or 'stream' (overrides)");
-  app.add_option("--lcm-url", lcm_url, "LCM provider URL (overrides the config)");
-  app.add_option("--log-csv", csv, "CSV log path, '' for none (overrides the config)");
-  app.add_option("--log-lcm", lcm, "LCM log path, '' for none (overrides the config)");
-  app.add_option("--duration", duration, "stop after this many seconds (overrides the config)");
+  app.add_option("--targets", line.targets,
+                 "trajectory file (.csv or YAML) or 'stream' (overrides)");
+  app.add_option("--mode", line.mode,
+                 "open_loop | closed_loop | model_less (overrides the controller options)");
+  app.add_option("--lcm-url", line.lcm_url, "LCM provider URL (overrides the config)");
+  app.add_option("--log-csv", line.csv, "CSV log path, '' for none (overrides the config)");
+  app.add_option("--log-lcm", line.lcm, "LCM log path, '' for none (overrides the config)");
+  app.add_option("--duration", line.duration,
+                 "stop after this many seconds (overrides the config)");
+}
+
+ControllerOverrides OverridesGiven(const CLI::App& app, const CommandLine& line) {
+  ControllerOverrides overrides;
+  if (app.count("--targets") > 0) overrides.targets = line.targets;
+  if (app.count("--mode") > 0) overrides.mode = line.mode;
+  if (app.count("--lcm-url") > 0) overrides.lcm_url = line.lcm_url;
+  if (app.count("--log-csv") > 0) overrides.log_csv = line.csv;
+  if (app.count("--log-lcm") > 0) overrides.log_lcm = line.lcm;
+  if (app.count("--duration") > 0) overrides.duration_s = line.duration;
+  return overrides;
 }
 
 void PrintSummary(ControllerClient& client, const ControllerLog& log, std::ostream& out) {
@@ -72,17 +88,11 @@ int ControllerMain(int argc, char** argv) {
   CLI::App app{std::string(kName) +
                ": tendon control on the sensed shape, within safety limits (docs/controller.md)"};
   CommandLine line;
-  std::string targets, lcm_url, csv, lcm;
-  double duration = 0.0;
-  AddOptions(app, line, targets, lcm_url, csv, lcm, duration);
+  AddOptions(app, line);
   CLI11_PARSE(app, argc, argv);
-  if (app.count("--targets") > 0) line.overrides.targets = targets;
-  if (app.count("--lcm-url") > 0) line.overrides.lcm_url = lcm_url;
-  if (app.count("--log-csv") > 0) line.overrides.log_csv = csv;
-  if (app.count("--log-lcm") > 0) line.overrides.log_lcm = lcm;
-  if (app.count("--duration") > 0) line.overrides.duration_s = duration;
   try {
-    return RunController(LoadControllerSetup(line.config, line.overrides), stop, std::cerr);
+    return RunController(LoadControllerSetup(line.config, OverridesGiven(app, line)), stop,
+                         std::cerr);
   } catch (const InputError& e) {
     std::cerr << kName << ": error: " << e.what() << std::endl;
     return 2;

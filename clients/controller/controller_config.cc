@@ -111,6 +111,14 @@ ControllerSetup LoadControllerSetup(const fs::path& config, const ControllerOver
                ? ControllerOptions{}
                : ParseControllerYaml(ReadTextFile(client.controller), client.controller);
   });
+  if (overrides.mode) {
+    ControlMode mode{};
+    if (!ParseControlMode(*overrides.mode, &mode)) {
+      throw InputError("--mode: expected open_loop, closed_loop or model_less, got '" +
+                       *overrides.mode + "'");
+    }
+    setup.controller.mode = *overrides.mode;
+  }
   setup.actuators = Within(setup.source, "actuators",
                            [&] { return LoadOptionsFile<ActuatorOptions>(client.actuators); });
   if (!client.driver.empty()) {

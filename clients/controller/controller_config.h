@@ -80,6 +80,7 @@ struct ControllerClientOptions {
 // What the command line may override (paths relative to the working directory).
 struct ControllerOverrides {
   std::optional<std::string> targets;
+  std::optional<std::string> mode;  // the controller options' mode: "open_loop", ...
   std::optional<std::string> lcm_url;
   std::optional<std::string> log_csv;
   std::optional<std::string> log_lcm;

@@ -77,8 +77,9 @@ bool TargetFromMessage(const configuration_target_t& message, int64_t now_utime,
 }
 
 Configuration TargetRamp::At(double time) const {
+  // A target set to start later holds the previous one until then.
+  if (time < start) return from;
   if (!(duration > 0.0) || time >= start + duration) return to;
-  if (time <= start) return from;
   const double fraction = (time - start) / duration;
   return from + fraction * (to - from);
 }

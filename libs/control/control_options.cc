@@ -124,7 +124,8 @@ std::string ClosedLoopOptions::Validate() const {
   return FirstError({ExpectNonNegative("proportional", proportional),
                      ExpectNonNegative("integral", integral),
                      ExpectPositive("max_correction_bend", max_correction_bend),
-                     ExpectPositive("max_correction_strain", max_correction_strain)});
+                     ExpectPositive("max_correction_strain", max_correction_strain),
+                     ExpectNonNegative("integral_deadband_mm", integral_deadband_mm)});
 }
 
 std::string ModelLessOptions::Validate() const {

@@ -106,7 +106,7 @@ struct WorkspaceOptions {
 // PI of the sensed error in (kappa_x, kappa_z, eps1), with anti-windup.
 struct ClosedLoopOptions {
   double proportional = 0.3;  // correction per unit error
-  double integral = 3.0;      // 1/s
+  double integral = 2.0;      // 1/s
   // Conditional integration: the integral does not grow toward what the
   // model's inverse and the safety gate did not carry out at the last step.
   bool anti_windup = true;
@@ -114,6 +114,12 @@ struct ClosedLoopOptions {
   // a strain.
   double max_correction_bend = 0.5;
   double max_correction_strain = 0.01;
+  // The integral holds while the sensed error, as tip motion (curvature
+  // errors times L1^2 / 2, the strain error times L1), is within this, mm.
+  // Play on the tendons (backlash) otherwise makes the integral hunt: it
+  // creeps through the play band while the tip stands still, then the tip
+  // jumps past the target, again and again. 0: always integrate.
+  double integral_deadband_mm = 0.3;
 
   template <class Visitor>
   void VisitFields(Visitor&& visit) {
@@ -121,6 +127,9 @@ struct ClosedLoopOptions {
     visit("integral", integral, "integral gain, 1/s (>= 0)");
     visit("anti_windup", anti_windup,
           "do not integrate toward what the inverse and the gate did not carry out");
+    visit("integral_deadband_mm", integral_deadband_mm,
+          "the integral holds while the sensed error, as tip motion, is within this, mm (>= 0; "
+          "stops hunting through tendon play; 0: always integrate)");
     visit("max_correction_bend", max_correction_bend,
           "largest curvature correction, as a bend over the distal length, rad (> 0)");
     visit("max_correction_strain", max_correction_strain, "largest strain correction (> 0)");

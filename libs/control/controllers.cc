@@ -78,13 +78,21 @@ Eigen::Vector3d ClosedLoopController::WithoutWindup(const Eigen::Vector3d& incre
   return weighed.cwiseQuotient(weights);
 }
 
+// An error in (kappa_x, kappa_z, eps1) as the tip motion it makes, mm.
+double ClosedLoopController::TipMotion(const Eigen::Vector3d& error) const {
+  const double distal = model_.lengths().distal;
+  const double bend = distal * distal / 2.0;
+  return Eigen::Vector3d(bend * error(0), bend * error(1), distal * error(2)).norm();
+}
+
 Eigen::VectorXd ClosedLoopController::Propose(const ControlInput& input) {
   const ClosedLoopOptions& gains = options_.closed_loop;
   const bool fresh = Fresh(input, options_.watchdog);
   const Eigen::Vector3d error =
       fresh ? Eigen::Vector3d(Controlled(input.target - input.sensed.configuration))
             : Eigen::Vector3d::Zero();
-  if (fresh && has_last_ && input.last_command.size() == model_.num_tendons()) {
+  if (fresh && has_last_ && input.last_command.size() == model_.num_tendons() &&
+      TipMotion(error) > gains.integral_deadband_mm) {
     Eigen::Vector3d increment = input.dt * gains.integral * error;
     if (gains.anti_windup) {
       increment =
