@@ -5,6 +5,7 @@
 #include <iostream>
 #include <memory>
 
+#include "clients/tools/demo/closed_loop_experiment.h"
 #include "clients/tools/demo/demo_network.h"
 #include "clients/tools/demo/live_demo.h"
 #include "clients/tools/demo/offline_demo.h"
@@ -19,6 +20,8 @@ constexpr int kLoopbackAddresses = 8;
 
 struct DemoCommandArgs {
   LiveDemoArgs live;
+  ExperimentArgs experiment;
+  bool pipeline = false;
   bool offline = false;
   int frames = 16;
   double voxel_size = 1.0;
@@ -78,17 +81,53 @@ void RunLive(DemoCommandArgs& args) {
   if (report.interrupted) throw CLI::RuntimeError(130);
 }
 
+// The plant lives in the rig-sim, whose cameras need the namespace's addresses.
+void RunExperiment(DemoCommandArgs& args) {
+  const DemoNetwork network = EnterDemoNetwork(ParseNetwork(args.network), kLoopbackAddresses);
+  const std::atomic<bool>& stop = StopFlagOnSignals();
+  if (!network.private_namespace) {
+    throw InputError(
+        "the closed-loop experiment runs the virtual rig's GigE cameras on "
+        "127.0.0.x in a private network namespace, and " +
+        network.why_not +
+        " (run as root, or allow unprivileged user namespaces; `shapesense demo "
+        "--pipeline` runs the sensing alone without one)");
+  }
+  ExperimentArgs& experiment = args.experiment;
+  experiment.out = args.live.out;
+  experiment.rate_hz = args.live.rate_hz;
+  experiment.seed = args.live.seed;
+  experiment.network = "private network namespace";
+  const ExperimentReport report = RunClosedLoopExperiment(experiment, stop, std::cout);
+  if (report.interrupted) throw CLI::RuntimeError(130);
+}
+
 }  // namespace
 
 void AddDemoCommand(CLI::App& app) {
   auto args = std::make_shared<DemoCommandArgs>();
   CLI::App* command = app.add_subcommand(
       "demo",
-      "Run the live pipeline on a virtual rig as separate programs over LCM for a set time; "
-      "print latency per stage and accuracy against the rig's truth; log and replay it");
+      "The closed-loop experiment on the virtual rig: the live pipeline as separate programs "
+      "over LCM, the controller driving the rig's plant through targets in open loop, then "
+      "closed loop on the sensed shape; a table, a plot and report.json of the tip errors. "
+      "--pipeline: the sensing alone, scored against the rig's truth, logged and replayed");
   command->add_option("--out", args->live.out, "output folder")->capture_default_str();
-  command->add_option("--duration", args->live.duration_s, "seconds to measure")
+  command->add_option("--duration", args->live.duration_s, "--pipeline: seconds to measure")
       ->capture_default_str();
+  command->add_option("--targets", args->experiment.targets.count, "number of targets")
+      ->capture_default_str();
+  command->add_option("--hold", args->experiment.targets.hold_s, "seconds each target is held")
+      ->capture_default_str();
+  command
+      ->add_option("--window", args->experiment.window_s,
+                   "steady state: the last this many seconds of each hold")
+      ->capture_default_str();
+  command->add_option("--modes", args->experiment.modes, "controller modes, one run each")
+      ->delimiter(',')
+      ->capture_default_str();
+  command->add_option("--config-dir", args->experiment.config_dir,
+                      "the repository's config/ (default: found beside the build)");
   command->add_option("--rate", args->live.rate_hz, "camera trigger rate, Hz")
       ->capture_default_str();
   command->add_option("--seed", args->live.seed, "seed of the rig and the noise")
@@ -105,7 +144,9 @@ void AddDemoCommand(CLI::App& app) {
                    "rendered inside the capture service; auto: gige in a private namespace")
       ->check(CLI::IsMember({"auto", "gige", "simulated"}))
       ->capture_default_str();
-  command->add_flag("--no-replay", args->no_replay, "do not replay the log at the end");
+  command->add_flag("--pipeline", args->pipeline,
+                    "the live sensing pipeline alone (no controller), scored, logged, replayed");
+  command->add_flag("--no-replay", args->no_replay, "--pipeline: do not replay the log");
   command->add_flag("--offline", args->offline,
                     "the old demo instead: render a sequence, measure it in this process, "
                     "write overlay pictures (no LCM)");
@@ -116,8 +157,10 @@ void AddDemoCommand(CLI::App& app) {
   command->callback([args] {
     if (args->offline) {
       RunOffline(*args);
-    } else {
+    } else if (args->pipeline) {
       RunLive(*args);
+    } else {
+      RunExperiment(*args);
     }
   });
 }

@@ -57,7 +57,12 @@ DemoProcess RigSim(const DemoSettings& settings, const DemoPlan& plan, bool back
                       "rig-sim: ready",
                       "",
                       false};
-  if (backdrop_only) process.argv.push_back("--backdrop-only");
+  if (backdrop_only) {
+    process.argv.push_back("--backdrop-only");
+  } else if (!settings.plant_config.empty()) {
+    process.argv.push_back("--plant");
+    process.argv.push_back(settings.plant_config.string());
+  }
   return process;
 }
 
@@ -94,13 +99,18 @@ DemoProcess Capture(const DemoSettings& settings, const DemoPlan& plan) {
 
 // The carving and shape services: defaults, the demo's rig and backgrounds.
 DemoProcess Service(const DemoSettings& settings, const DemoPlan& plan, const std::string& name) {
-  return {name,
-          {Program(settings, "shapesense-" + name), "--lcm-url", settings.lcm_url, "--rig",
-           plan.rig.string(), "--backgrounds", plan.backgrounds.string(), "--duration",
-           Backstop(settings)},
-          "",
-          name,
-          false};
+  DemoProcess process{name,
+                      {Program(settings, "shapesense-" + name), "--lcm-url", settings.lcm_url,
+                       "--rig", plan.rig.string(), "--backgrounds", plan.backgrounds.string(),
+                       "--duration", Backstop(settings)},
+                      "",
+                      name,
+                      false};
+  if (name == "shape" && !settings.shape_config.empty()) {
+    process.argv.push_back("--config");
+    process.argv.push_back(settings.shape_config.string());
+  }
+  return process;
 }
 
 DemoProcess Logger(const DemoSettings& settings, const DemoPlan& plan) {
@@ -128,6 +138,18 @@ std::string SimulatedCaptureConfig(const DemoSettings& settings, const DemoPlan&
 
 std::string CameraSourceName(DemoCameras cameras) {
   return cameras == DemoCameras::kGigE ? "gige" : "simulated";
+}
+
+DemoProcess ControllerRun(const DemoSettings& settings, const fs::path& config,
+                          const std::string& mode, const fs::path& log_dir) {
+  return {"controller-" + mode,
+          {Program(settings, "shapesense-controller"), "--config", config.string(), "--mode", mode,
+           "--targets", "stream", "--lcm-url", settings.lcm_url, "--log-csv",
+           (log_dir / "controller_log.csv").string(), "--log-lcm",
+           (log_dir / "controller_log.lcmlog").string(), "--duration", Backstop(settings)},
+          "",
+          "controller",
+          false};
 }
 
 DemoPlan MakeDemoPlan(const DemoSettings& settings) {

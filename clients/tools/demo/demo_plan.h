@@ -34,6 +34,11 @@ struct DemoSettings {
   double duration_s = 20.0;               // of the measured run
   uint32_t seed = 7;                      // pixel noise
   int background_frames = 15;             // per camera, for the median
+  // Plant mode (the closed-loop experiment): the rig-sim's --plant file and
+  // the shape service's --config (which senses q); empty: the trajectory and
+  // the shape service's defaults.
+  std::filesystem::path plant_config;
+  std::filesystem::path shape_config;
 };
 
 // One program of the demo.
@@ -67,5 +72,11 @@ struct DemoPlan {
 };
 
 DemoPlan MakeDemoPlan(const DemoSettings& settings);
+
+// One run of shapesense-controller in the closed-loop experiment: `config`
+// (config/controller_client.yaml) in `mode`, its targets streamed, its logs
+// in `log_dir`. Up once its status ("controller") has arrived.
+DemoProcess ControllerRun(const DemoSettings& settings, const std::filesystem::path& config,
+                          const std::string& mode, const std::filesystem::path& log_dir);
 
 }  // namespace shapesense

@@ -152,6 +152,16 @@ ProgramEnd DemoProcesses::Stop(const std::string& name) {
   return end;
 }
 
+void DemoProcesses::Signal(const std::string& name, int signal) {
+  Find(name).child->Signal(signal);
+}
+
+bool DemoProcesses::IsRunning(const std::string& name) {
+  const auto found = std::find_if(running_.begin(), running_.end(),
+                                  [&](const Running& r) { return r.process.name == name; });
+  return found != running_.end() && !found->child->ExitStatus().has_value();
+}
+
 void DemoProcesses::StopAll() {
   while (!running_.empty()) Stop(running_.back().process.name);
 }

@@ -71,6 +71,10 @@ class DemoProcesses {
   // Stops one program (SIGTERM, SIGKILL after a grace period); stopping
   // one that already ended only records how it ended.
   ProgramEnd Stop(const std::string& name);
+  // Sends `signal` to a running program (faults in tests: SIGSTOP freezes it).
+  void Signal(const std::string& name, int signal);
+  // Whether the program is started and has not ended.
+  bool IsRunning(const std::string& name);
   // Stops the rest, the last started first.
   void StopAll();
   // How every program that has ended so far ended, in that order.

@@ -5,6 +5,7 @@
 #include <sstream>
 #include <thread>
 
+#include "clients/tools/demo/demo_session.h"
 #include "clients/tools/replay/replay_command.h"
 #include "libs/camera/rig_yaml.h"
 #include "libs/core/error.h"
@@ -18,7 +19,6 @@ namespace fs = std::filesystem;
 namespace {
 
 using Clock = std::chrono::steady_clock;
-constexpr auto kStartTimeout = std::chrono::seconds(120);  // a sanitizer build's carving table
 
 double SecondsSince(Clock::time_point start) {
   return std::chrono::duration<double>(Clock::now() - start).count();
@@ -48,39 +48,6 @@ DemoSettings MakeSettings(const LiveDemoArgs& args, const Rig& rig) {
   return settings;
 }
 
-// A fresh output folder with the rig file (and the simulated cameras' config).
-void PrepareOutput(const DemoPlan& plan, const Rig& rig) {
-  for (const fs::path& old : {plan.log, plan.report, plan.replay_shapes}) fs::remove(old);
-  fs::remove_all(plan.backgrounds);
-  fs::create_directories(plan.backgrounds);
-  WriteFileAtomically(plan.rig, FormatRigYaml(rig));
-  if (!plan.capture_config.empty()) {
-    WriteFileAtomically(plan.capture_config, plan.capture_config_text);
-  }
-}
-
-// Receivers of images ask LCM for 4 MB socket buffers; the kernel grants at
-// most net.core.rmem_max, and less loses images of whole frame-sets.
-void WarnIfSocketBuffersAreSmall(std::ostream& log) {
-  constexpr long kWanted = 4194304;
-  long limit = 0;
-  std::ifstream("/proc/sys/net/core/rmem_max") >> limit;
-  if (limit <= 0 || limit >= kWanted) return;
-  log << "demo: the kernel caps socket buffers at " << limit
-      << " bytes (net.core.rmem_max), below the " << kWanted
-      << " that receivers of images ask for: expect lost frame-sets.\n"
-         "      As root: sysctl -w net.core.rmem_max="
-      << kWanted << std::endl;
-}
-
-void ThrowIfMissing(const DemoPlan& plan) {
-  const std::vector<std::string> missing = MissingPrograms(plan);
-  if (missing.empty()) return;
-  std::string message = "the demo cannot run:";
-  for (const std::string& line : missing) message += "\n  " + line;
-  throw DemoFailure("", message);
-}
-
 // What this process hears of the run: the truth, the shapes and every service's status.
 void Subscribe(LcmBus& bus, DemoScorer& scorer) {
   bus.Subscribe<shape_t>(channels::kShape,
@@ -92,33 +59,6 @@ void Subscribe(LcmBus& bus, DemoScorer& scorer) {
   bus.Subscribe<service_status_t>(channels::kStatusPattern,
                                   [&scorer](const service_status_t& status, const std::string&,
                                             int64_t) { scorer.AddStatus(status); });
-}
-
-// Handles the bus for about `ms` (LCM's wait ends at each message).
-void Pump(LcmBus& bus, int ms) {
-  const auto end = Clock::now() + std::chrono::milliseconds(ms);
-  for (;;) {
-    const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(end - Clock::now());
-    if (left.count() <= 0) return;
-    if (bus.Handle(static_cast<int>(left.count())) < 0) std::this_thread::sleep_for(left);
-  }
-}
-
-// Starts all but the last side by side, and the last (the one that needs
-// the others: the capture service) once they are all up. False when stopped
-// meanwhile.
-bool StartAll(DemoProcesses& processes, const std::vector<DemoProcess>& list, std::ostream& log) {
-  if (list.empty()) return true;
-  const size_t last = list.size() - 1;
-  for (size_t i = 0; i < last; ++i) {
-    log << "  starting " << list[i].name << std::endl;
-    processes.Launch(list[i]);
-  }
-  for (size_t i = 0; i < last; ++i) {
-    if (!processes.WaitUntilUp(list[i].name, kStartTimeout)) return false;
-  }
-  log << "  starting " << list[last].name << std::endl;
-  return processes.Start(list[last], kStartTimeout);
 }
 
 class ProgressPrinter {
@@ -161,24 +101,6 @@ double Measure(const LiveDemoArgs& args, DemoProcesses& processes, LcmBus& bus,
   return SecondsSince(start);
 }
 
-// The capture service first; then the frame-sets in flight drain through
-// (no new shape for a while) before the services and the logger stop.
-void StopPipeline(DemoProcesses& processes, LcmBus& bus, const DemoScorer& scorer) {
-  processes.Stop("capture");
-  const auto deadline = Clock::now() + std::chrono::seconds(5);
-  auto quiet_since = Clock::now();
-  int shapes = scorer.shapes();
-  while (Clock::now() < deadline && SecondsSince(quiet_since) < 0.7) {
-    Pump(bus, 50);
-    processes.ReadOutput();
-    if (scorer.shapes() != shapes) {
-      shapes = scorer.shapes();
-      quiet_since = Clock::now();
-    }
-  }
-  processes.StopAll();
-}
-
 ReplayCheck CheckReplay(const DemoPlan& plan, const DemoScorer& scorer, std::ostream& log) {
   ReplayArgs args;
   args.log = plan.log;
@@ -208,12 +130,6 @@ LiveDemoReport StartReport(const LiveDemoArgs& args, const DemoSettings& setting
   report.duration_s = args.duration_s;
   report.log = plan.log;
   return report;
-}
-
-int64_t FileBytes(const fs::path& path) {
-  std::error_code error;
-  const auto bytes = fs::file_size(path, error);
-  return error ? 0 : static_cast<int64_t>(bytes);
 }
 
 void FinishReport(LiveDemoReport& report, const DemoProcesses& processes, const DemoPlan& plan) {

@@ -1,0 +1,516 @@
+#include "clients/tools/demo/closed_loop_experiment.h"
+
+#include <chrono>
+#include <cstdio>
+#include <opencv2/imgcodecs.hpp>
+#include <set>
+
+#include "clients/controller/controller_config.h"
+#include "clients/tools/demo/closed_loop_plot.h"
+#include "clients/tools/demo/demo_session.h"
+#include "libs/control/targets.h"
+#include "libs/core/error.h"
+#include "libs/mechanics/configuration_geometry.h"
+#include "libs/sim/scene_generators.h"
+#include "runtime/file_io.h"
+#include "runtime/lcm/channels.h"
+#include "runtime/lcm/message_convert.h"
+#include "shapesense/configuration_target_t.hpp"
+#include "shapesense/tendon_command_t.hpp"
+
+namespace shapesense {
+namespace fs = std::filesystem;
+namespace {
+
+// Targets go out this long before they take effect, carrying their start
+// time: the controller applies them on the dot, however late LCM is.
+constexpr double kPublishAheadS = 0.3;
+// The first target's clock starts this long after the controller is up.
+constexpr double kRunStartDelayS = 0.5;
+constexpr double kProgressPeriodS = 5.0;
+
+struct ExperimentFiles {
+  fs::path plant;       // the rig-sim's --plant
+  fs::path shape;       // the shape service's --config
+  fs::path controller;  // the controller client's --config
+};
+
+ExperimentFiles FindFiles(const ExperimentArgs& args) {
+  const fs::path dir = args.config_dir.empty() ? FindConfigDir() : args.config_dir;
+  if (dir.empty()) {
+    throw InputError(
+        "the closed-loop experiment needs the repository's config/ folder (rig_plant.yaml, "
+        "shape_service_plant.yaml, controller_client.yaml): run it from the repository, or "
+        "give --config-dir");
+  }
+  const ExperimentFiles files{fs::absolute(dir / "rig_plant.yaml"),
+                              fs::absolute(dir / "shape_service_plant.yaml"),
+                              fs::absolute(dir / "controller_client.yaml")};
+  for (const fs::path& file : {files.plant, files.shape, files.controller}) {
+    if (!fs::exists(file)) throw InputError(file.string() + ": not found");
+  }
+  return files;
+}
+
+// The controller's own view: its model, limits and target resolution.
+struct ControllerView {
+  ControllerSetup setup;
+  TendonModel model;
+  explicit ControllerView(const fs::path& config)
+      : setup(LoadControllerSetup(config, StreamOverrides())), model(setup.manipulator) {}
+
+  static ControllerOverrides StreamOverrides() {
+    ControllerOverrides overrides;
+    overrides.targets = "stream";
+    return overrides;
+  }
+};
+
+// The experiment's targets as the controller resolves them (eps1 raised to
+// keep the tendons taut, eps0 the one that follows): what it aims at.
+std::vector<ExperimentTarget> ResolveTargets(const ExperimentArgs& args,
+                                             const ControllerView& view) {
+  std::vector<ExperimentTarget> targets = MakeExperimentTargets(args.targets, view.model.lengths());
+  const TargetResolver resolver(view.model, view.setup.controller);
+  for (size_t i = 0; i < targets.size(); ++i) {
+    Target target;
+    target.configuration = targets[i].q;
+    const ResolvedTarget resolved = resolver.Resolve(target);
+    if (!resolved.ok) {
+      throw InputError("experiment target " + std::to_string(i + 1) + ": " + resolved.reason);
+    }
+    targets[i].q = resolved.configuration;
+  }
+  return targets;
+}
+
+DemoSettings MakeSettings(const ExperimentArgs& args, const Rig& rig, const ExperimentFiles& files,
+                          double run_s) {
+  DemoSettings settings;
+  settings.bin_dir = args.bin_dir.empty() ? ExecutableDir() : args.bin_dir;
+  settings.lcm_logger = args.lcm_logger.empty() ? FindOnPath("lcm-logger") : args.lcm_logger;
+  if (settings.lcm_logger.empty()) settings.lcm_logger = "/usr/bin/lcm-logger";  // named as missing
+  settings.out = fs::absolute(args.out);
+  settings.cameras = DemoCameras::kGigE;  // the plant lives in the rig-sim
+  for (const Camera& camera : rig.cameras) settings.camera_names.push_back(camera.name);
+  settings.rate_hz = args.rate_hz;
+  settings.duration_s = run_s * static_cast<double>(args.modes.size());
+  settings.seed = args.seed;
+  settings.plant_config = files.plant;
+  settings.shape_config = files.shape;
+  return settings;
+}
+
+double RunSeconds(const ExperimentArgs& args) {
+  return args.targets.first_start_s + args.targets.hold_s * args.targets.count;
+}
+
+// What this process hears: the truth, the shapes, the commands and every
+// status; while a run records, its samples and its audit.
+class ExperimentListener {
+ public:
+  ExperimentListener(LcmBus& bus, DemoScorer& scorer, SafetyEnvelope envelope)
+      : scorer_(scorer), envelope_(std::move(envelope)), audit_(envelope_) {
+    bus.Subscribe<shape_t>(
+        channels::kTruth, [this](shape_t&& truth, const std::string&, int64_t) { OnTruth(truth); });
+    bus.Subscribe<shape_t>(channels::kShape, [this](shape_t&& shape, const std::string&,
+                                                    int64_t utime) { OnShape(shape, utime); });
+    bus.Subscribe<tendon_command_t>(
+        channels::kTendonCommand,
+        [this](tendon_command_t&& command, const std::string&, int64_t) { OnCommand(command); });
+    bus.Subscribe<service_status_t>(channels::kStatusPattern,
+                                    [this](service_status_t&& status, const std::string&, int64_t) {
+                                      scorer_.AddStatus(status);
+                                      seen_.insert(status.service);
+                                    });
+  }
+
+  // A run's clock starts at `origin_utime`; its controller's status is not seen yet.
+  void BeginRun(ExperimentRun* run, int64_t origin_utime) {
+    run_ = run;
+    origin_utime_ = origin_utime;
+    audit_ = LimitAudit(envelope_);
+    seen_.erase("controller");
+  }
+  void EndRun() {
+    if (run_ == nullptr) return;
+    run_->violations = audit_.violations();
+    run_->first_violation = audit_.first_violation();
+    run_->commands = audit_.commands();
+    run_ = nullptr;
+  }
+  bool StatusSeen(const std::string& service) const { return seen_.contains(service); }
+  const ConfigurationSample* latest() const {
+    return run_ == nullptr || run_->truth.empty() ? nullptr : &run_->truth.back();
+  }
+
+ private:
+  void OnTruth(const shape_t& truth) {
+    scorer_.AddTruth(truth);
+    const std::optional<Configuration> q = MessageConfiguration(truth);
+    if (run_ == nullptr || !q) return;
+    const double time = static_cast<double>(truth.trigger_utime - origin_utime_) * 1e-6;
+    run_->truth.push_back({time, *q});
+  }
+  void OnShape(const shape_t& shape, int64_t utime) {
+    scorer_.AddShape(shape, utime);
+    if (run_ != nullptr && shape.has_configuration) ++run_->shapes;
+  }
+  void OnCommand(const tendon_command_t& command) {
+    if (run_ == nullptr) return;
+    Eigen::VectorXd displacements(static_cast<Eigen::Index>(command.displacement_mm.size()));
+    for (size_t i = 0; i < command.displacement_mm.size(); ++i) {
+      displacements(static_cast<Eigen::Index>(i)) = command.displacement_mm[i];
+    }
+    audit_.Check(displacements, command.header.utime);
+  }
+
+  DemoScorer& scorer_;
+  const SafetyEnvelope envelope_;
+  LimitAudit audit_;
+  ExperimentRun* run_ = nullptr;
+  int64_t origin_utime_ = 0;
+  std::set<std::string> seen_;
+};
+
+configuration_target_t TargetMessage(const ExperimentTarget& target, int64_t origin_utime,
+                                     int index) {
+  configuration_target_t message{};
+  message.header.seq = index;
+  message.header.utime = NowUtime();
+  message.kind = configuration_target_t::KIND_CONFIGURATION;
+  for (int i = 0; i < 4; ++i) message.q[i] = target.q(i);
+  message.duration_s = 0.0;
+  message.start_utime = origin_utime + static_cast<int64_t>(target.start_s * 1e6);
+  message.source = "shapesense demo";
+  return message;
+}
+
+double TipErrorNow(const ExperimentReport& report, const ConfigurationSample* sample) {
+  if (sample == nullptr) return -1.0;
+  for (const ExperimentTarget& target : report.targets) {
+    if (sample->time_s >= target.start_s && sample->time_s < target.end_s) {
+      return (BaseFromTip(sample->q, report.rest).translation() -
+              BaseFromTip(target.q, report.rest).translation())
+          .norm();
+    }
+  }
+  return -1.0;
+}
+
+void PrintProgress(const ExperimentReport& report, const std::string& mode, double t,
+                   const ExperimentListener& listener, std::ostream& log) {
+  char line[160];
+  const double error = TipErrorNow(report, listener.latest());
+  const int target =
+      std::clamp(static_cast<int>((t - report.targets.front().start_s) /
+                                  (report.targets.front().end_s - report.targets.front().start_s)) +
+                     1,
+                 0, static_cast<int>(report.targets.size()));
+  std::snprintf(line, sizeof(line), "  %s %5.1f s: target %d/%zu, true tip %s mm from it",
+                mode.c_str(), t, target, report.targets.size(),
+                error < 0.0 ? "-" : std::to_string(error).substr(0, 5).c_str());
+  log << line << std::endl;
+}
+
+// One controller run: start it, stream the targets, record, stop it.
+class RunDriver {
+ public:
+  RunDriver(const ExperimentArgs& args, const DemoSettings& settings, const fs::path& controller,
+            DemoProcesses& processes, LcmBus& bus, ExperimentListener& listener,
+            const std::atomic<bool>& stop, std::ostream& log)
+      : args_(args),
+        settings_(settings),
+        controller_(controller),
+        processes_(processes),
+        bus_(bus),
+        listener_(listener),
+        stop_(stop),
+        log_(log) {}
+
+  // False when stopped meanwhile.
+  bool Run(const std::string& mode, ExperimentReport& report, ExperimentRun& run) {
+    const DemoProcess process = ControllerRun(settings_, controller_, mode, settings_.out / mode);
+    fs::create_directories(settings_.out / mode);
+    listener_.BeginRun(&run, 0);
+    log_ << "  starting " << process.name << std::endl;
+    if (!processes_.Start(process, kDemoStartTimeout)) return false;
+    const int64_t origin = NowUtime() + static_cast<int64_t>(kRunStartDelayS * 1e6);
+    listener_.BeginRun(&run, origin);
+    const bool finished = Stream(mode, report, run, origin);
+    run.end = processes_.Stop(process.name);
+    listener_.EndRun();
+    run.score = ScoreRun(mode, report.targets, run.truth, report.rest, args_.window_s);
+    return finished;
+  }
+
+ private:
+  bool Stream(const std::string& mode, const ExperimentReport& report, ExperimentRun& run,
+              int64_t origin) {
+    const double end_s = report.targets.back().end_s;
+    double next_progress = kProgressPeriodS;
+    for (;;) {
+      const double t = static_cast<double>(NowUtime() - origin) * 1e-6;
+      if (stop_) return false;
+      if (t >= end_s) return true;
+      while (run.targets_sent < static_cast<int>(report.targets.size()) &&
+             report.targets[static_cast<size_t>(run.targets_sent)].start_s - kPublishAheadS <= t) {
+        const auto& target = report.targets[static_cast<size_t>(run.targets_sent)];
+        bus_.Publish(channels::kTarget, TargetMessage(target, origin, run.targets_sent));
+        ++run.targets_sent;
+      }
+      Pump(bus_, 20);
+      processes_.CheckRunning();
+      if (args_.progress != DemoProgress::kOff && t >= next_progress) {
+        next_progress += kProgressPeriodS;
+        PrintProgress(report, mode, t, listener_, log_);
+      }
+    }
+  }
+
+  const ExperimentArgs& args_;
+  const DemoSettings& settings_;
+  const fs::path controller_;
+  DemoProcesses& processes_;
+  LcmBus& bus_;
+  ExperimentListener& listener_;
+  const std::atomic<bool>& stop_;
+  std::ostream& log_;
+};
+
+void CheckArgs(const ExperimentArgs& args) {
+  if (!(args.rate_hz >= 5.0 && args.rate_hz <= 300.0)) {
+    throw InputError("--rate: expected Hz in [5, 300], got " + std::to_string(args.rate_hz));
+  }
+  if (const std::string error = args.targets.Validate(); !error.empty()) {
+    throw InputError("targets: " + error);
+  }
+  if (!(args.window_s > 0.0 && args.window_s < args.targets.hold_s)) {
+    throw InputError("steady-state window: expected 0 < window < hold (" +
+                     std::to_string(args.targets.hold_s) + " s), got " +
+                     std::to_string(args.window_s));
+  }
+  for (const std::string& mode : args.modes) {
+    ControlMode parsed{};
+    if (!ParseControlMode(mode, &parsed)) throw InputError("mode '" + mode + "': unknown");
+  }
+}
+
+// The index of the target in force at `time_s`, -1 before the first.
+int TargetAt(const std::vector<ExperimentTarget>& targets, double time_s) {
+  for (size_t i = targets.size(); i-- > 0;) {
+    if (time_s >= targets[i].start_s) return static_cast<int>(i);
+  }
+  return -1;
+}
+
+// Every truth sample of a run with its target: out/<mode>/tip_path.csv.
+std::string TipPathCsv(const ExperimentReport& report, const ExperimentRun& run) {
+  std::string csv =
+      "time_s,target,kappa_x,kappa_z,eps0,eps1,tip_x,tip_y,tip_z,target_tip_x,target_tip_y,"
+      "target_tip_z,tip_error_mm\n";
+  char row[400];
+  for (const ConfigurationSample& sample : run.truth) {
+    const int index = TargetAt(report.targets, sample.time_s);
+    if (index < 0) continue;
+    const Vec3 tip = BaseFromTip(sample.q, report.rest).translation();
+    const Vec3 goal =
+        BaseFromTip(report.targets[static_cast<size_t>(index)].q, report.rest).translation();
+    std::snprintf(row, sizeof(row),
+                  "%.4f,%d,%.9g,%.9g,%.9g,%.9g,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f\n", sample.time_s,
+                  index + 1, sample.q(0), sample.q(1), sample.q(2), sample.q(3), tip.x(), tip.y(),
+                  tip.z(), goal.x(), goal.y(), goal.z(), (tip - goal).norm());
+    csv += row;
+  }
+  return csv;
+}
+
+void WriteOutputs(const ExperimentReport& report, const fs::path& out, std::ostream& log) {
+  for (const ExperimentRun& run : report.runs) {
+    fs::create_directories(out / run.score.mode);
+    WriteFileAtomically(out / run.score.mode / "tip_path.csv", TipPathCsv(report, run));
+  }
+  std::vector<RunScore> scores;
+  std::vector<ExperimentPlotRun> plotted;
+  for (const ExperimentRun& run : report.runs) scores.push_back(run.score);
+  for (size_t i = 0; i < report.runs.size(); ++i) {
+    plotted.push_back(
+        {report.runs[i].score.mode, TipPath(report.runs[i].truth, report.rest), &scores[i]});
+  }
+  const std::string table = FormatExperimentTable(report.targets, scores, report.rest);
+  WriteFileAtomically(out / "experiment.txt", table);
+  if (!report.targets.empty() && !plotted.empty()) {
+    const cv::Mat plot = DrawExperimentPlot(report.targets, plotted, report.rest);
+    if (!cv::imwrite((out / "tip_paths.png").string(), plot)) {
+      log << "demo: could not write " << (out / "tip_paths.png").string() << std::endl;
+    }
+  }
+  WriteFileAtomically(out / "report.json", ExperimentReportToJson(report).dump(2) + "\n");
+  log << "\n" << table;
+}
+
+void PrintRunSummary(const ExperimentRun& run, std::ostream& log) {
+  log << "  " << run.score.mode << ": mean steady-state tip error " << run.score.mean_tip_error_mm
+      << " mm (" << run.score.mean_tip_error_percent << "% of L1), " << run.score.targets_scored
+      << " targets scored, " << run.commands << " commands audited, " << run.violations.total()
+      << " limit violations"
+      << (run.first_violation.empty() ? "" : " (first: " + run.first_violation + ")")
+      << "; controller " << run.end.how << std::endl;
+}
+
+// The backgrounds, the pipeline, then one controller run per mode; false
+// when stopped before the end.
+bool RunPhases(const ExperimentArgs& args, const DemoPlan& plan, const DemoSettings& settings,
+               const ExperimentFiles& files, DemoProcesses& processes, LcmBus& bus,
+               ExperimentListener& listener, const std::atomic<bool>& stop,
+               ExperimentReport& report, std::ostream& log) {
+  log << "backgrounds: the rig showing its backdrop alone" << std::endl;
+  if (!StartAll(processes, plan.background, log)) return false;
+  processes.StopAll();
+  log << "live pipeline, the rig in plant mode, logged to " << plan.log.string() << std::endl;
+  if (!StartAll(processes, plan.pipeline, log)) return false;
+  RunDriver driver(args, settings, files.controller, processes, bus, listener, stop, log);
+  for (const std::string& mode : args.modes) {
+    log << mode << ": " << report.targets.size() << " targets, " << args.targets.hold_s << " s each"
+        << std::endl;
+    report.runs.emplace_back();
+    if (!driver.Run(mode, report, report.runs.back())) return false;
+    PrintRunSummary(report.runs.back(), log);
+  }
+  return true;
+}
+
+nlohmann::json ProgramsToJson(const std::vector<ProgramEnd>& programs) {
+  nlohmann::json list = nlohmann::json::array();
+  for (const ProgramEnd& end : programs) {
+    list.push_back({{"name", end.name}, {"how", end.how}, {"clean", end.clean}});
+  }
+  return list;
+}
+
+nlohmann::json RunToJson(const ExperimentRun& run) {
+  nlohmann::json json = RunScoreToJson(run.score);
+  json["limit_violations"] = run.violations.total();
+  json["limit_violations_by_kind"] = {{"range_or_tension", run.violations.range_or_tension},
+                                      {"rate", run.violations.rate},
+                                      {"malformed", run.violations.malformed}};
+  json["first_violation"] = run.first_violation;
+  json["commands_audited"] = run.commands;
+  json["sensed_shapes"] = run.shapes;
+  json["truth_samples"] = run.truth.size();
+  json["targets_sent"] = run.targets_sent;
+  json["controller"] = {{"how", run.end.how}, {"clean", run.end.clean}};
+  return json;
+}
+
+nlohmann::json MeanError(const ExperimentReport& report, const std::string& mode) {
+  const ExperimentRun* run = report.Run(mode);
+  if (run == nullptr || run->score.targets_scored == 0) return nullptr;
+  return run->score.mean_tip_error_mm;
+}
+
+}  // namespace
+
+nlohmann::json ExperimentReportToJson(const ExperimentReport& report) {
+  nlohmann::json json;
+  json["open_loop_tip_error_mm"] = MeanError(report, "open_loop");
+  json["closed_loop_tip_error_mm"] = MeanError(report, "closed_loop");
+  json["limit_violations"] = report.limit_violations();
+  json["distal_length_mm"] = report.rest.distal;
+  json["targets"] = report.targets.size();
+  json["hold_s"] =
+      report.targets.empty() ? 0.0 : report.targets[0].end_s - report.targets[0].start_s;
+  json["steady_state_window_s"] = report.window_s;
+  json["network"] = report.network;
+  json["lcm_url"] = report.lcm_url;
+  json["rate_hz"] = report.rate_hz;
+  json["runs"] = nlohmann::json::array();
+  for (const ExperimentRun& run : report.runs) json["runs"].push_back(RunToJson(run));
+  const LiveScorer::Report& live = report.sensing.live;
+  json["sensing"] = {{"frame_sets_rendered", live.truths},
+                     {"shapes", live.shapes},
+                     {"valid_shapes", live.valid_shapes},
+                     {"centerline_rms_mean_mm", live.centerline_rms_mean},
+                     {"centerline_rms_max_mm", live.centerline_rms_max},
+                     {"tip_error_mean_mm", live.tip_error_mean},
+                     {"tip_error_max_mm", live.tip_error_max},
+                     {"trigger_to_shape_p50_ms", live.trigger_to_shape_ms.p50}};
+  json["log"] = report.log.string();
+  json["programs"] = ProgramsToJson(report.programs);
+  json["failure"] = report.failure;
+  json["interrupted"] = report.interrupted;
+  return json;
+}
+
+const ExperimentRun* ExperimentReport::Run(const std::string& mode) const {
+  for (const ExperimentRun& run : runs) {
+    if (run.score.mode == mode) return &run;
+  }
+  return nullptr;
+}
+
+int ExperimentReport::limit_violations() const {
+  int total = 0;
+  for (const ExperimentRun& run : runs) total += run.violations.total();
+  return total;
+}
+
+fs::path FindConfigDir() {
+  for (const fs::path& dir :
+       {ExecutableDir() / ".." / ".." / "config", fs::current_path() / "config"}) {
+    std::error_code error;
+    if (fs::exists(dir / "rig_plant.yaml", error)) return fs::weakly_canonical(dir, error);
+  }
+  return {};
+}
+
+ExperimentReport RunClosedLoopExperiment(const ExperimentArgs& args, const std::atomic<bool>& stop,
+                                         std::ostream& log) {
+  CheckArgs(args);
+  const ExperimentFiles files = FindFiles(args);
+  const ControllerView view(files.controller);
+  SyntheticRigOptions rig_options;
+  rig_options.seed = args.seed;
+  const Rig rig = MakeSyntheticRig(rig_options);
+  const DemoSettings settings = MakeSettings(args, rig, files, RunSeconds(args));
+  const DemoPlan plan = MakeDemoPlan(settings);
+  ExperimentReport report;
+  report.network = args.network;
+  report.lcm_url = settings.lcm_url;
+  report.rate_hz = args.rate_hz;
+  report.rest = view.model.lengths();
+  report.targets = ResolveTargets(args, view);
+  report.window_s = args.window_s;
+  report.log = plan.log;
+  ThrowIfMissing(plan);
+  WarnIfSocketBuffersAreSmall(log);
+  PrepareOutput(plan, rig);
+  LcmBus bus(settings.lcm_url);
+  DemoScorer scorer;
+  ExperimentListener listener(bus, scorer,
+                              SafetyEnvelope(view.model, view.setup.controller.limits));
+  DemoProcesses processes(
+      plan.logs_dir, stop,
+      {[&bus](int ms) { Pump(bus, ms); },
+       [&listener](const std::string& service) { return listener.StatusSeen(service); }});
+  try {
+    report.interrupted =
+        !RunPhases(args, plan, settings, files, processes, bus, listener, stop, report, log);
+    StopPipeline(processes, bus, scorer);
+  } catch (const DemoFailure& e) {
+    processes.StopAll();
+    report.failure = e.what();
+    report.programs = processes.ends();
+    WriteOutputs(report, settings.out, log);
+    throw;
+  }
+  processes.StopAll();
+  report.sensing = scorer.Finish(NowUtime());
+  report.programs = processes.ends();
+  WriteOutputs(report, settings.out, log);
+  log << "wrote " << (settings.out / "report.json").string() << ", experiment.txt, "
+      << "tip_paths.png; the programs' output is in " << plan.logs_dir.string() << "/\n";
+  return report;
+}
+
+}  // namespace shapesense

@@ -1,0 +1,98 @@
+#pragma once
+
+// `shapesense demo`: the closed-loop experiment on the virtual rig. The
+// live pipeline runs as separate programs over LCM with the rig-sim in plant
+// mode (the manipulator is a tendon plant 20% off the controller's model,
+// with play on its tendons); the shape service senses q. Then
+// shapesense-controller drives the plant through the same targets once per
+// mode (open loop, then closed loop on the sensed shape), each target held
+// for a while. This process is the experimenter: it streams the targets on
+// SHAPESENSE_TARGET at their times, records the plant's true q from the
+// rig's truth, audits every command that went out against the safety
+// limits (LimitAudit) and scores each target's steady-state tip error
+// (closed_loop_score.h).
+//
+//   rig-sim --plant ─► capture ─► carving ─► shape (q) ─► controller ─► rig-sim
+//        └─ truth (true q) ─────────────────────────────► this process ◄─ commands
+//
+// Writes out/report.json, out/experiment.txt (the table), out/tip_paths.png,
+// out/pipeline.lcm (lcm-logger), out/<mode>/controller_log.{csv,lcmlog},
+// out/logs/<program>.log and out/setup/.
+#include <atomic>
+#include <cstdint>
+#include <filesystem>
+#include <nlohmann/json.hpp>
+#include <ostream>
+#include <string>
+#include <vector>
+
+#include "clients/tools/demo/closed_loop_score.h"
+#include "clients/tools/demo/demo_processes.h"
+#include "clients/tools/demo/demo_scorer.h"
+#include "clients/tools/demo/live_demo.h"
+#include "libs/control/limit_audit.h"
+
+namespace shapesense {
+
+struct ExperimentArgs {
+  std::filesystem::path out = "demo-output";
+  // rig_plant.yaml, shape_service_plant.yaml, controller_client.yaml and the
+  // files they name; empty: the repository's config/ (FindConfigDir).
+  std::filesystem::path config_dir;
+  double rate_hz = 30.0;  // camera trigger rate
+  uint32_t seed = 7;      // synthetic rig and pixel noise
+  ExperimentTargetOptions targets;
+  double window_s = 1.0;  // steady state: the last this many seconds of each hold
+  std::vector<std::string> modes = {"open_loop", "closed_loop"};
+  std::string network = "private network namespace";  // for the report
+  std::filesystem::path bin_dir;                      // empty: beside this executable
+  std::filesystem::path lcm_logger;                   // empty: lcm-logger on $PATH
+  DemoProgress progress = DemoProgress::kLines;
+};
+
+// What one controller run did.
+struct ExperimentRun {
+  RunScore score;
+  std::vector<ConfigurationSample> truth;  // the plant's true q over the run
+  LimitViolations violations;              // of the commands it sent
+  std::string first_violation;
+  int64_t commands = 0;  // audited
+  int64_t shapes = 0;    // sensed shapes with q that arrived during the run
+  int targets_sent = 0;
+  ProgramEnd end;  // how the controller ended (cleanly, on SIGTERM)
+};
+
+struct ExperimentReport {
+  std::string network;
+  std::string lcm_url;
+  double rate_hz = 0.0;
+  SectionLengths rest;
+  std::vector<ExperimentTarget> targets;  // resolved by the controller's model
+  double window_s = 0.0;
+  std::vector<ExperimentRun> runs;
+  DemoScore sensing;  // the shapes against the truth over the whole experiment
+  std::vector<ProgramEnd> programs;
+  std::filesystem::path log;
+  std::string failure;
+  bool interrupted = false;
+
+  // The run of `mode`, nullptr when none.
+  const ExperimentRun* Run(const std::string& mode) const;
+  int limit_violations() const;
+};
+
+// The repository's config/ seen from this executable (build/bin/../../config)
+// or from the working directory; empty when neither has rig_plant.yaml.
+std::filesystem::path FindConfigDir();
+
+// Runs it; `stop` (Ctrl-C) ends it early, cleanly. Throws DemoFailure naming
+// a program that is missing, failed to start or ended early (report.json
+// says so too), InputError on bad arguments or config files.
+ExperimentReport RunClosedLoopExperiment(const ExperimentArgs& args, const std::atomic<bool>& stop,
+                                         std::ostream& log);
+
+// report.json: open_loop_tip_error_mm, closed_loop_tip_error_mm (means over
+// the targets at steady state), limit_violations, and every run's scores.
+nlohmann::json ExperimentReportToJson(const ExperimentReport& report);
+
+}  // namespace shapesense

@@ -1,0 +1,40 @@
+#pragma once
+
+// What the live demo and the closed-loop experiment share while their
+// programs run: the output folder, the checks before anything starts,
+// pumping this process's LCM bus, starting and stopping the pipeline.
+#include <cstdint>
+#include <filesystem>
+#include <ostream>
+#include <vector>
+
+#include "clients/tools/demo/demo_plan.h"
+#include "clients/tools/demo/demo_processes.h"
+#include "clients/tools/demo/demo_scorer.h"
+#include "libs/camera/camera.h"
+#include "runtime/lcm/lcm_bus.h"
+
+namespace shapesense {
+
+// How long a program may take to come up (a sanitizer build's carving table).
+inline constexpr auto kDemoStartTimeout = std::chrono::seconds(120);
+
+// A fresh output folder with the rig file (and the simulated cameras' config).
+void PrepareOutput(const DemoPlan& plan, const Rig& rig);
+// Says so when the kernel caps socket buffers below what image receivers ask.
+void WarnIfSocketBuffersAreSmall(std::ostream& log);
+// Throws DemoFailure listing every program of `plan` that is missing.
+void ThrowIfMissing(const DemoPlan& plan);
+// Handles the bus for about `ms` (LCM's wait ends at each message).
+void Pump(LcmBus& bus, int ms);
+// Starts all but the last side by side, and the last (the one that needs
+// the others: the capture service) once they are all up. False when stopped
+// meanwhile.
+bool StartAll(DemoProcesses& processes, const std::vector<DemoProcess>& list, std::ostream& log);
+// Stops the capture service first; then the frame-sets in flight drain
+// through (no new shape for a while) before the rest stop.
+void StopPipeline(DemoProcesses& processes, LcmBus& bus, const DemoScorer& scorer);
+// A file's size, 0 when it is not there.
+int64_t FileBytes(const std::filesystem::path& path);
+
+}  // namespace shapesense
