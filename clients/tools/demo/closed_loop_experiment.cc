@@ -43,9 +43,9 @@ ExperimentFiles FindFiles(const ExperimentArgs& args) {
         "shape_service_plant.yaml, controller_client.yaml): run it from the repository, or "
         "give --config-dir");
   }
-  const ExperimentFiles files{fs::absolute(dir / "rig_plant.yaml"),
-                              fs::absolute(dir / "shape_service_plant.yaml"),
-                              fs::absolute(dir / "controller_client.yaml")};
+  ExperimentFiles files{fs::absolute(dir / "rig_plant.yaml"),
+                        fs::absolute(dir / "shape_service_plant.yaml"),
+                        fs::absolute(dir / "controller_client.yaml")};
   for (const fs::path& file : {files.plant, files.shape, files.controller}) {
     if (!fs::exists(file)) throw InputError(file.string() + ": not found");
   }

@@ -270,6 +270,7 @@ std::string TitleLine(const std::vector<ExperimentPlotRun>& runs, const SectionL
 cv::Mat DrawExperimentPlot(const std::vector<ExperimentTarget>& targets,
                            const std::vector<ExperimentPlotRun>& runs, const SectionLengths& rest) {
   std::vector<Vec3> target_tips;
+  target_tips.reserve(targets.size());
   for (const ExperimentTarget& target : targets) {
     target_tips.push_back(BaseFromTip(target.q, rest).translation());
   }

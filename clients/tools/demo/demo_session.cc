@@ -10,15 +10,11 @@
 
 namespace shapesense {
 namespace fs = std::filesystem;
-namespace {
-
 using Clock = std::chrono::steady_clock;
 
 double SecondsSince(Clock::time_point start) {
   return std::chrono::duration<double>(Clock::now() - start).count();
 }
-
-}  // namespace
 
 // A fresh output folder with the rig file (and the simulated cameras' config).
 void PrepareOutput(const DemoPlan& plan, const Rig& rig) {

@@ -34,6 +34,8 @@ bool StartAll(DemoProcesses& processes, const std::vector<DemoProcess>& list, st
 // Stops the capture service first; then the frame-sets in flight drain
 // through (no new shape for a while) before the rest stop.
 void StopPipeline(DemoProcesses& processes, LcmBus& bus, const DemoScorer& scorer);
+// Seconds on the steady clock since `start`.
+double SecondsSince(std::chrono::steady_clock::time_point start);
 // A file's size, 0 when it is not there.
 int64_t FileBytes(const std::filesystem::path& path);
 

@@ -20,10 +20,6 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
-double SecondsSince(Clock::time_point start) {
-  return std::chrono::duration<double>(Clock::now() - start).count();
-}
-
 void CheckArgs(const LiveDemoArgs& args) {
   if (!(args.duration_s > 0.0 && args.duration_s <= 3600.0)) {
     throw InputError("--duration: expected seconds in (0, 3600], got " +
