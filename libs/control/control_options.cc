@@ -125,7 +125,9 @@ std::string ClosedLoopOptions::Validate() const {
                      ExpectNonNegative("integral", integral),
                      ExpectPositive("max_correction_bend", max_correction_bend),
                      ExpectPositive("max_correction_strain", max_correction_strain),
-                     ExpectNonNegative("integral_deadband_mm", integral_deadband_mm)});
+                     ExpectNonNegative("integral_deadband_mm", integral_deadband_mm),
+                     ExpectWithin("strain_proportional", strain_proportional, 0.0, 1.0, false,
+                                  false, "a fraction in [0, 1]")});
 }
 
 std::string ModelLessOptions::Validate() const {

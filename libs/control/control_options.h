@@ -114,12 +114,20 @@ struct ClosedLoopOptions {
   // a strain.
   double max_correction_bend = 0.5;
   double max_correction_strain = 0.01;
-  // The integral holds while the sensed error, as tip motion (curvature
-  // errors times L1^2 / 2, the strain error times L1), is within this, mm.
-  // Play on the tendons (backlash) otherwise makes the integral hunt: it
-  // creeps through the play band while the tip stands still, then the tip
-  // jumps past the target, again and again. 0: always integrate.
+  // Each part of the integral, the curvatures' and eps1's, holds while its
+  // error, as tip motion (|kappa error| L1^2 / 2, |eps1 error| L1), is
+  // within this, mm. Play on the tendons (backlash) otherwise makes the
+  // integral hunt: it creeps through the play band while the tip stands
+  // still, then the tip jumps past the target, again and again; and a small
+  // bias in the sensed eps1 lets the pretension drift until the play lets
+  // go. 0: always integrate.
   double integral_deadband_mm = 0.3;
+  // The proportional gain on the eps1 error, as a fraction of that on the
+  // curvatures. eps1 is sensed from the distal band's arc length, several
+  // times noisier than the bend, and every change of it moves all tendons at
+  // once (pretension), which unequal play turns into bending: at full gain
+  // the sensing noise on eps1 alone shook the tip by 1-2 mm.
+  double strain_proportional = 0.1;
 
   template <class Visitor>
   void VisitFields(Visitor&& visit) {
@@ -128,8 +136,11 @@ struct ClosedLoopOptions {
     visit("anti_windup", anti_windup,
           "do not integrate toward what the inverse and the gate did not carry out");
     visit("integral_deadband_mm", integral_deadband_mm,
-          "the integral holds while the sensed error, as tip motion, is within this, mm (>= 0; "
-          "stops hunting through tendon play; 0: always integrate)");
+          "each part of the integral (curvatures, eps1) holds while its error, as tip motion, is "
+          "within this, mm (>= 0; stops hunting through tendon play; 0: always integrate)");
+    visit("strain_proportional", strain_proportional,
+          "proportional gain on the eps1 error, as a fraction of that on the curvatures [0-1] "
+          "(eps1 is sensed noisier, and moves every tendon at once)");
     visit("max_correction_bend", max_correction_bend,
           "largest curvature correction, as a bend over the distal length, rad (> 0)");
     visit("max_correction_strain", max_correction_strain, "largest strain correction (> 0)");

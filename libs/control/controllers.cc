@@ -78,11 +78,15 @@ Eigen::Vector3d ClosedLoopController::WithoutWindup(const Eigen::Vector3d& incre
   return weighed.cwiseQuotient(weights);
 }
 
-// An error in (kappa_x, kappa_z, eps1) as the tip motion it makes, mm.
-double ClosedLoopController::TipMotion(const Eigen::Vector3d& error) const {
+// The error that counts toward the integral: each part (the curvatures,
+// eps1) only while the tip motion it stands for is beyond the deadband.
+Eigen::Vector3d ClosedLoopController::OutsideDeadband(const Eigen::Vector3d& error) const {
   const double distal = model_.lengths().distal;
-  const double bend = distal * distal / 2.0;
-  return Eigen::Vector3d(bend * error(0), bend * error(1), distal * error(2)).norm();
+  const double deadband = options_.closed_loop.integral_deadband_mm;
+  Eigen::Vector3d counted = error;
+  if (distal * distal / 2.0 * error.head<2>().norm() <= deadband) counted.head<2>().setZero();
+  if (distal * std::abs(error(2)) <= deadband) counted(2) = 0.0;
+  return counted;
 }
 
 Eigen::VectorXd ClosedLoopController::Propose(const ControlInput& input) {
@@ -91,16 +95,17 @@ Eigen::VectorXd ClosedLoopController::Propose(const ControlInput& input) {
   const Eigen::Vector3d error =
       fresh ? Eigen::Vector3d(Controlled(input.target - input.sensed.configuration))
             : Eigen::Vector3d::Zero();
-  if (fresh && has_last_ && input.last_command.size() == model_.num_tendons() &&
-      TipMotion(error) > gains.integral_deadband_mm) {
-    Eigen::Vector3d increment = input.dt * gains.integral * error;
+  if (fresh && has_last_ && input.last_command.size() == model_.num_tendons()) {
+    Eigen::Vector3d increment = input.dt * gains.integral * OutsideDeadband(error);
     if (gains.anti_windup) {
       increment =
           WithoutWindup(increment, Controlled(model_.Forward(input.last_command)) - last_desired_);
     }
     integral_ = Bounded(integral_ + increment);
   }
-  const Eigen::Vector3d correction = Bounded(gains.proportional * error + integral_);
+  Eigen::Vector3d proportional = gains.proportional * error;
+  proportional(2) *= gains.strain_proportional;
+  const Eigen::Vector3d correction = Bounded(proportional + integral_);
   const Configuration desired = WithControlled(input.target, Controlled(input.target) + correction);
   const InverseSolution inverse =
       model_.InverseWithMinimumTension(desired, options_.limits.min_tension);

@@ -78,7 +78,7 @@ class ClosedLoopController : public Controller {
 
  private:
   Eigen::Vector3d Bounded(const Eigen::Vector3d& correction) const;
-  double TipMotion(const Eigen::Vector3d& error) const;
+  Eigen::Vector3d OutsideDeadband(const Eigen::Vector3d& error) const;
   Eigen::Vector3d WithoutWindup(const Eigen::Vector3d& increment,
                                 const Eigen::Vector3d& shortfall) const;
 

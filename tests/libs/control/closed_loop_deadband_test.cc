@@ -1,7 +1,8 @@
 // The closed loop's integral deadband (ClosedLoopOptions::integral_deadband_mm):
-// the integral holds while the sensed error, as tip motion (curvature errors
-// times L1^2 / 2, the strain error times L1, their Euclidean norm), is within
-// the deadband, and integrates beyond it.
+// each part of the integral, the curvatures' and eps1's, holds while its
+// error, as tip motion (|kappa error| L1^2 / 2, |eps1 error| L1), is within
+// the deadband, and integrates beyond it. And the proportional gain on eps1
+// (strain_proportional).
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
@@ -74,14 +75,30 @@ std::vector<Eigen::Vector3d> SomeDirections(int count) {
   return directions;
 }
 
-TEST(ClosedLoopDeadbandTest, TheIntegralHoldsWhileTheErrorIsWithinTheDeadband) {
+// Bending directions in the (bend x, bend z) plane, unit, the strain 0.
+std::vector<Eigen::Vector3d> BendDirections(int count) {
+  std::vector<Eigen::Vector3d> directions;
+  for (int i = 0; i < count; ++i) {
+    const double angle = 2.0 * std::acos(-1.0) * i / count + 0.3;
+    directions.emplace_back(std::cos(angle), std::sin(angle), 0.0);
+  }
+  return directions;
+}
+
+// Every step but the first (which has no previous one) adds dt * gain * error;
+// the errors are far below the correction bounds.
+Eigen::Vector3d Integrated(const ControllerOptions& options, const Eigen::Vector3d& error) {
+  return (kSteps - 1) * kDt * options.closed_loop.integral * error;
+}
+
+TEST(ClosedLoopDeadbandTest, TheCurvaturesIntegralHoldsWhileTheirErrorIsWithinTheDeadband) {
   const TendonModel model(testing::CatheterOptions());
   const ControllerOptions options;
   const double deadband = options.closed_loop.integral_deadband_mm;
   ASSERT_GT(deadband, 0.0);
-  // Along mixed directions too: a sum or a max of the components instead of
+  // In every bending direction: a sum or a max of the components instead of
   // the norm would integrate some of these.
-  for (const Eigen::Vector3d& direction : SomeDirections(20)) {
+  for (const Eigen::Vector3d& direction : BendDirections(16)) {
     for (const double fraction : {0.1, 0.5, 0.99}) {
       const Eigen::Vector3d error = ErrorOfTipMotion(model, direction, fraction * deadband);
       EXPECT_EQ(IntegralAfterSteps(model, options, error), Eigen::Vector3d::Zero())
@@ -90,20 +107,79 @@ TEST(ClosedLoopDeadbandTest, TheIntegralHoldsWhileTheErrorIsWithinTheDeadband) {
   }
 }
 
-TEST(ClosedLoopDeadbandTest, TheIntegralGrowsJustBeyondTheDeadband) {
+TEST(ClosedLoopDeadbandTest, TheCurvaturesIntegralGrowsJustBeyondTheDeadband) {
   const TendonModel model(testing::CatheterOptions());
   const ControllerOptions options;
   const double deadband = options.closed_loop.integral_deadband_mm;
-  for (const Eigen::Vector3d& direction : SomeDirections(20)) {
+  for (const Eigen::Vector3d& direction : BendDirections(16)) {
     const Eigen::Vector3d error = ErrorOfTipMotion(model, direction, 1.01 * deadband);
     const Eigen::Vector3d integral = IntegralAfterSteps(model, options, error);
-    // Every step but the first (which has no previous one) adds dt * gain * error;
-    // the error is far below the correction bounds.
-    const Eigen::Vector3d expected = (kSteps - 1) * kDt * options.closed_loop.integral * error;
+    const Eigen::Vector3d expected = Integrated(options, error);
     EXPECT_LT((integral - expected).norm(), 1e-6 * expected.norm())
         << "direction " << direction.transpose() << ": " << integral.transpose() << " vs "
         << expected.transpose();
   }
+}
+
+TEST(ClosedLoopDeadbandTest, EachPartHasItsOwnDeadband) {
+  const TendonModel model(testing::CatheterOptions());
+  const ControllerOptions options;
+  const double deadband = options.closed_loop.integral_deadband_mm;
+  const Eigen::Vector2d bend_within =
+      ErrorOfTipMotion(model, Eigen::Vector3d(1, 1, 0), 0.9 * deadband).head<2>();
+  const Eigen::Vector2d bend_beyond =
+      ErrorOfTipMotion(model, Eigen::Vector3d(1, 1, 0), 1.1 * deadband).head<2>();
+  const double strain_within = ErrorOfTipMotion(model, Eigen::Vector3d::UnitZ(), 0.9 * deadband)(2);
+  const double strain_beyond = ErrorOfTipMotion(model, Eigen::Vector3d::UnitZ(), 1.1 * deadband)(2);
+  // Together both are beyond the deadband (their norm is); each on its own is not.
+  Eigen::Vector3d error(bend_within(0), bend_within(1), strain_within);
+  EXPECT_EQ(IntegralAfterSteps(model, options, error), Eigen::Vector3d::Zero());
+  error << bend_beyond, strain_within;
+  Eigen::Vector3d integral = IntegralAfterSteps(model, options, error);
+  EXPECT_LT((integral.head<2>() - Integrated(options, error).head<2>()).norm(),
+            1e-6 * error.head<2>().norm());
+  EXPECT_EQ(integral(2), 0.0);
+  error << bend_within, strain_beyond;
+  integral = IntegralAfterSteps(model, options, error);
+  EXPECT_EQ(integral.head<2>(), Eigen::Vector2d::Zero());
+  EXPECT_NEAR(integral(2), Integrated(options, error)(2), 1e-6 * std::abs(error(2)));
+}
+
+// The proportional term alone (integral 0): the correction the controller
+// asks for, read back through the model from its proposal.
+Eigen::Vector3d ProportionalCorrection(const TendonModel& model, const ControllerOptions& options,
+                                       const Eigen::Vector3d& error) {
+  ClosedLoopController controller(model, options);
+  const Configuration target = Target(model);
+  Configuration sensed = target;
+  sensed(kKappaX) -= error(0);
+  sensed(kKappaZ) -= error(1);
+  sensed(kStrainDistal) -= error(2);
+  ControlInput input;
+  input.time = 1.0;
+  input.dt = kDt;
+  input.target = target;
+  input.sensed = {sensed, 0.95, true};
+  const Configuration reached = model.Forward(controller.Propose(input));
+  return {reached(kKappaX) - target(kKappaX), reached(kKappaZ) - target(kKappaZ),
+          reached(kStrainDistal) - target(kStrainDistal)};
+}
+
+TEST(ClosedLoopDeadbandTest, TheStrainsProportionalGainIsAFractionOfTheBends) {
+  const TendonModel model(testing::CatheterOptions());
+  ControllerOptions options;
+  options.closed_loop.integral = 0.0;
+  const Eigen::Vector3d error(2e-4, -1e-4, 1e-3);
+  for (const double fraction : {0.0, 0.1, 1.0}) {
+    options.closed_loop.strain_proportional = fraction;
+    const Eigen::Vector3d correction = ProportionalCorrection(model, options, error);
+    const double gain = options.closed_loop.proportional;
+    EXPECT_NEAR(correction(0), gain * error(0), 1e-9) << fraction;
+    EXPECT_NEAR(correction(1), gain * error(1), 1e-9) << fraction;
+    EXPECT_NEAR(correction(2), fraction * gain * error(2), 1e-9) << fraction;
+  }
+  options.closed_loop.strain_proportional = 1.5;
+  EXPECT_THAT(options.closed_loop.Validate(), HasSubstr("strain_proportional"));
 }
 
 TEST(ClosedLoopDeadbandTest, ZeroDeadbandIntegratesAnyNonzeroError) {
