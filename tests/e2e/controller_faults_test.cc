@@ -65,6 +65,7 @@ class ControllerFaultsTest : public ::testing::Test {
     settings_.duration_s = 120.0;
     settings_.plant_config = config_ / "rig_plant.yaml";
     settings_.shape_config = config_ / "shape_service_plant.yaml";
+    settings_.log_channels = kControlChannels;
     SyntheticRigOptions rig_options;
     rig_options.seed = settings_.seed;
     rig_ = MakeSyntheticRig(rig_options);

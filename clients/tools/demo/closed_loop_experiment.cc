@@ -98,6 +98,7 @@ DemoSettings MakeSettings(const ExperimentArgs& args, const Rig& rig, const Expe
   settings.seed = args.seed;
   settings.plant_config = files.plant;
   settings.shape_config = files.shape;
+  settings.log_channels = kControlChannels;  // images would be gigabytes
   return settings;
 }
 

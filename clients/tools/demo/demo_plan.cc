@@ -114,12 +114,16 @@ DemoProcess Service(const DemoSettings& settings, const DemoPlan& plan, const st
 }
 
 DemoProcess Logger(const DemoSettings& settings, const DemoPlan& plan) {
-  return {
+  DemoProcess process{
       "lcm-logger",
       {settings.lcm_logger.string(), "--lcm-url=" + settings.lcm_url, "--force", plan.log.string()},
       "Opening log file",
       "",
       false};
+  if (!settings.log_channels.empty()) {
+    process.argv.insert(process.argv.begin() + 1, "--channel=" + settings.log_channels);
+  }
+  return process;
 }
 
 std::string SimulatedCaptureConfig(const DemoSettings& settings, const DemoPlan& plan) {

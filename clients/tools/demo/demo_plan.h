@@ -39,7 +39,16 @@ struct DemoSettings {
   // the shape service's defaults.
   std::filesystem::path plant_config;
   std::filesystem::path shape_config;
+  // The channels lcm-logger records (a regex; empty: all). Camera images at
+  // 30 Hz are about 85 MB per second of run.
+  std::string log_channels;
 };
+
+// Everything but the camera images, the silhouettes and the voxels: what a
+// controller run needs to be studied again (shapes with q, truth, targets,
+// commands, actuator and plant states, e-stops, status), a few MB a minute.
+inline constexpr const char* kControlChannels =
+    "SHAPESENSE_(SHAPE|TRUTH|TARGET|ESTOP|TENDON_.*|PLANT_.*|STATUS_.*)";
 
 // One program of the demo.
 struct DemoProcess {

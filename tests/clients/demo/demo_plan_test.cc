@@ -11,6 +11,7 @@
 #include <filesystem>
 #include <fstream>
 #include <random>
+#include <regex>
 
 #include "services/capture/capture_options.h"
 
@@ -156,6 +157,48 @@ TEST(DemoPlanTest, EveryProgramOnOneUrlAndTheLoggerFirstTheCaptureLast) {
       EXPECT_EQ(fs::path(p.argv.front()).parent_path(), settings.bin_dir) << p.name;
     }
   }
+}
+
+// The closed-loop experiment's plan: the rig-sim serves the plant, the shape
+// service senses q, the logger leaves the images out, and each controller
+// run is on the same network with its logs apart.
+TEST(DemoPlanTest, PlantModeServesThePlantSensesQAndLogsNoImages) {
+  std::mt19937 random(15);
+  DemoSettings settings = RandomSettings(random, DemoCameras::kGigE);
+  settings.plant_config = "/cfg/rig_plant.yaml";
+  settings.shape_config = "/cfg/shape_service_plant.yaml";
+  settings.log_channels = kControlChannels;
+  const DemoPlan plan = MakeDemoPlan(settings);
+  for (const DemoProcess& p : plan.pipeline) {
+    if (p.name == "rig-sim") {
+      EXPECT_EQ(ValueOf(p.argv, "--plant"), settings.plant_config);
+    } else if (p.name == "shape") {
+      EXPECT_EQ(ValueOf(p.argv, "--config"), settings.shape_config);
+    } else if (p.name == "carving") {
+      EXPECT_FALSE(Has(p.argv, "--config"));
+    } else if (p.name == "lcm-logger") {
+      EXPECT_TRUE(Has(p.argv, std::string("--channel=") + kControlChannels));
+    }
+  }
+  for (const DemoProcess& p : plan.background) EXPECT_FALSE(Has(p.argv, "--plant")) << p.name;
+  const std::regex logged(kControlChannels);
+  for (const char* channel :
+       {"SHAPESENSE_SHAPE", "SHAPESENSE_TRUTH", "SHAPESENSE_TARGET", "SHAPESENSE_TENDON_COMMAND",
+        "SHAPESENSE_PLANT_STATE", "SHAPESENSE_STATUS_controller", "SHAPESENSE_ESTOP"}) {
+    EXPECT_TRUE(std::regex_match(channel, logged)) << channel;
+  }
+  for (const char* channel :
+       {"SHAPESENSE_IMAGE_cam0", "SHAPESENSE_VOXELS", "SHAPESENSE_SILHOUETTE_cam0"}) {
+    EXPECT_FALSE(std::regex_match(channel, logged)) << channel;
+  }
+  const DemoProcess run = ControllerRun(settings, "/cfg/controller_client.yaml", "closed_loop",
+                                        settings.out / "closed_loop");
+  EXPECT_EQ(ValueOf(run.argv, "--mode"), "closed_loop");
+  EXPECT_EQ(ValueOf(run.argv, "--targets"), "stream");
+  EXPECT_EQ(ValueOf(run.argv, "--lcm-url"), settings.lcm_url);
+  EXPECT_EQ(ValueOf(run.argv, "--log-csv"),
+            (settings.out / "closed_loop" / "controller_log.csv").string());
+  EXPECT_EQ(run.ready_status, "controller");
 }
 
 TEST(DemoPlanTest, SimulatedCamerasNeedNoRigSimAndTheirConfigIsValid) {
