@@ -38,6 +38,15 @@ Eigen::Vector3d ErrorOfTipMotion(const TendonModel& model, const Eigen::Vector3d
   return (tip_mm * direction.normalized()).cwiseQuotient(per_unit);
 }
 
+// The target with `error` (kappa_x, kappa_z, eps1) taken off: what is sensed.
+Configuration SensedWithError(const Configuration& target, const Eigen::Vector3d& error) {
+  Configuration sensed = target;
+  sensed(kKappaX) -= error(0);
+  sensed(kKappaZ) -= error(1);
+  sensed(kStrainDistal) -= error(2);
+  return sensed;
+}
+
 // Runs the controller kSteps times with the sensing fresh and a constant
 // sensed error; the last command is the previous proposal (a gate that let
 // everything through), so anti-windup takes nothing away. The integral after.
@@ -45,10 +54,7 @@ Eigen::Vector3d IntegralAfterSteps(const TendonModel& model, const ControllerOpt
                                    const Eigen::Vector3d& error) {
   ClosedLoopController controller(model, options);
   const Configuration target = Target(model);
-  Configuration sensed = target;
-  sensed(kKappaX) -= error(0);
-  sensed(kKappaZ) -= error(1);
-  sensed(kStrainDistal) -= error(2);
+  const Configuration sensed = SensedWithError(target, error);
   Eigen::VectorXd last = model.InverseWithMinimumTension(target, 0.3).displacements;
   double time = 1.0;
   for (int step = 0; step < kSteps; ++step) {
@@ -151,10 +157,7 @@ Eigen::Vector3d ProportionalCorrection(const TendonModel& model, const Controlle
                                        const Eigen::Vector3d& error) {
   ClosedLoopController controller(model, options);
   const Configuration target = Target(model);
-  Configuration sensed = target;
-  sensed(kKappaX) -= error(0);
-  sensed(kKappaZ) -= error(1);
-  sensed(kStrainDistal) -= error(2);
+  const Configuration sensed = SensedWithError(target, error);
   ControlInput input;
   input.time = 1.0;
   input.dt = kDt;
