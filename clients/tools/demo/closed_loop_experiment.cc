@@ -3,7 +3,9 @@
 #include <chrono>
 #include <cstdio>
 #include <opencv2/imgcodecs.hpp>
+#include <optional>
 #include <set>
+#include <utility>
 
 #include "clients/controller/controller_config.h"
 #include "clients/tools/demo/closed_loop_plot.h"
@@ -86,16 +88,10 @@ std::vector<ExperimentTarget> ResolveTargets(const ExperimentArgs& args,
 
 DemoSettings MakeSettings(const ExperimentArgs& args, const Rig& rig, const ExperimentFiles& files,
                           double run_s) {
-  DemoSettings settings;
-  settings.bin_dir = args.bin_dir.empty() ? ExecutableDir() : args.bin_dir;
-  settings.lcm_logger = args.lcm_logger.empty() ? FindOnPath("lcm-logger") : args.lcm_logger;
-  if (settings.lcm_logger.empty()) settings.lcm_logger = "/usr/bin/lcm-logger";  // named as missing
-  settings.out = fs::absolute(args.out);
+  DemoSettings settings =
+      BaseDemoSettings(args.bin_dir, args.lcm_logger, args.out, rig, args.rate_hz, args.seed);
   settings.cameras = DemoCameras::kGigE;  // the plant lives in the rig-sim
-  for (const Camera& camera : rig.cameras) settings.camera_names.push_back(camera.name);
-  settings.rate_hz = args.rate_hz;
   settings.duration_s = run_s * static_cast<double>(args.modes.size());
-  settings.seed = args.seed;
   settings.plant_config = files.plant;
   settings.shape_config = files.shape;
   settings.log_channels = kControlChannels;  // images would be gigabytes
@@ -126,32 +122,39 @@ class ExperimentListener {
                                     });
   }
 
-  // A run's clock starts at `origin_utime`; its controller's status is not seen yet.
-  void BeginRun(ExperimentRun* run, int64_t origin_utime) {
+  // Records for `run` from now on, the controller's first commands
+  // included; its controller's status is not seen yet.
+  void BeginRun(ExperimentRun* run) {
     run_ = run;
-    origin_utime_ = origin_utime;
     audit_ = LimitAudit(envelope_);
+    truth_.clear();
     seen_.erase("controller");
   }
-  void EndRun() {
+  // Ends the recording: the truth's times become seconds from `origin_utime`.
+  void EndRun(int64_t origin_utime) {
     if (run_ == nullptr) return;
+    for (const auto& [utime, q] : truth_) {
+      run_->truth.push_back({static_cast<double>(utime - origin_utime) * 1e-6, q});
+    }
     run_->violations = audit_.violations();
     run_->first_violation = audit_.first_violation();
     run_->commands = audit_.commands();
     run_ = nullptr;
   }
   bool StatusSeen(const std::string& service) const { return seen_.contains(service); }
-  const ConfigurationSample* latest() const {
-    return run_ == nullptr || run_->truth.empty() ? nullptr : &run_->truth.back();
+  // The newest true configuration of the run, as ConfigurationSample with
+  // the time from `origin_utime`; nullopt before any.
+  std::optional<ConfigurationSample> Latest(int64_t origin_utime) const {
+    if (truth_.empty()) return std::nullopt;
+    const auto& [utime, q] = truth_.back();
+    return ConfigurationSample{static_cast<double>(utime - origin_utime) * 1e-6, q};
   }
 
  private:
   void OnTruth(const shape_t& truth) {
     scorer_.AddTruth(truth);
     const std::optional<Configuration> q = MessageConfiguration(truth);
-    if (run_ == nullptr || !q) return;
-    const double time = static_cast<double>(truth.trigger_utime - origin_utime_) * 1e-6;
-    run_->truth.push_back({time, *q});
+    if (run_ != nullptr && q) truth_.emplace_back(truth.trigger_utime, *q);
   }
   void OnShape(const shape_t& shape, int64_t utime) {
     scorer_.AddShape(shape, utime);
@@ -159,20 +162,31 @@ class ExperimentListener {
   }
   void OnCommand(const tendon_command_t& command) {
     if (run_ == nullptr) return;
-    Eigen::VectorXd displacements(static_cast<Eigen::Index>(command.displacement_mm.size()));
-    for (size_t i = 0; i < command.displacement_mm.size(); ++i) {
-      displacements(static_cast<Eigen::Index>(i)) = command.displacement_mm[i];
-    }
-    audit_.Check(displacements, command.header.utime);
+    audit_.Check(Eigen::Map<const Eigen::VectorXd>(
+                     command.displacement_mm.data(),
+                     static_cast<Eigen::Index>(command.displacement_mm.size())),
+                 command.header.utime);
   }
 
   DemoScorer& scorer_;
   const SafetyEnvelope envelope_;
   LimitAudit audit_;
   ExperimentRun* run_ = nullptr;
-  int64_t origin_utime_ = 0;
+  std::vector<std::pair<int64_t, Configuration>> truth_;  // by trigger time, µs
   std::set<std::string> seen_;
 };
+
+// The index of the target in force at `time_s`, -1 before the first.
+int TargetAt(const std::vector<ExperimentTarget>& targets, double time_s) {
+  for (size_t i = targets.size(); i-- > 0;) {
+    if (time_s >= targets[i].start_s) return static_cast<int>(i);
+  }
+  return -1;
+}
+
+Vec3 TipOf(const Configuration& q, const SectionLengths& rest) {
+  return BaseFromTip(q, rest).translation();
+}
 
 configuration_target_t TargetMessage(const ExperimentTarget& target, int64_t origin_utime,
                                      int index) {
@@ -187,30 +201,19 @@ configuration_target_t TargetMessage(const ExperimentTarget& target, int64_t ori
   return message;
 }
 
-double TipErrorNow(const ExperimentReport& report, const ConfigurationSample* sample) {
-  if (sample == nullptr) return -1.0;
-  for (const ExperimentTarget& target : report.targets) {
-    if (sample->time_s >= target.start_s && sample->time_s < target.end_s) {
-      return (BaseFromTip(sample->q, report.rest).translation() -
-              BaseFromTip(target.q, report.rest).translation())
-          .norm();
-    }
-  }
-  return -1.0;
-}
-
 void PrintProgress(const ExperimentReport& report, const std::string& mode, double t,
-                   const ExperimentListener& listener, std::ostream& log) {
+                   const std::optional<ConfigurationSample>& latest, std::ostream& log) {
+  const int target = TargetAt(report.targets, t);
+  const int at_sample = latest ? TargetAt(report.targets, latest->time_s) : -1;
+  char error[32] = "-";
+  if (at_sample >= 0) {
+    const Configuration& goal = report.targets[static_cast<size_t>(at_sample)].q;
+    std::snprintf(error, sizeof(error), "%.3f",
+                  (TipOf(latest->q, report.rest) - TipOf(goal, report.rest)).norm());
+  }
   char line[160];
-  const double error = TipErrorNow(report, listener.latest());
-  const int target =
-      std::clamp(static_cast<int>((t - report.targets.front().start_s) /
-                                  (report.targets.front().end_s - report.targets.front().start_s)) +
-                     1,
-                 0, static_cast<int>(report.targets.size()));
   std::snprintf(line, sizeof(line), "  %s %5.1f s: target %d/%zu, true tip %s mm from it",
-                mode.c_str(), t, target, report.targets.size(),
-                error < 0.0 ? "-" : std::to_string(error).substr(0, 5).c_str());
+                mode.c_str(), t, target + 1, report.targets.size(), error);
   log << line << std::endl;
 }
 
@@ -233,14 +236,13 @@ class RunDriver {
   bool Run(const std::string& mode, ExperimentReport& report, ExperimentRun& run) {
     const DemoProcess process = ControllerRun(settings_, controller_, mode, settings_.out / mode);
     fs::create_directories(settings_.out / mode);
-    listener_.BeginRun(&run, 0);
+    listener_.BeginRun(&run);
     log_ << "  starting " << process.name << std::endl;
     if (!processes_.Start(process, kDemoStartTimeout)) return false;
     const int64_t origin = NowUtime() + static_cast<int64_t>(kRunStartDelayS * 1e6);
-    listener_.BeginRun(&run, origin);
     const bool finished = Stream(mode, report, run, origin);
     run.end = processes_.Stop(process.name);
-    listener_.EndRun();
+    listener_.EndRun(origin);
     run.score = ScoreRun(mode, report.targets, run.truth, report.rest, args_.window_s);
     return finished;
   }
@@ -264,7 +266,7 @@ class RunDriver {
       processes_.CheckRunning();
       if (args_.progress != DemoProgress::kOff && t >= next_progress) {
         next_progress += kProgressPeriodS;
-        PrintProgress(report, mode, t, listener_, log_);
+        PrintProgress(report, mode, t, listener_.Latest(origin), log_);
       }
     }
   }
@@ -297,14 +299,6 @@ void CheckArgs(const ExperimentArgs& args) {
   }
 }
 
-// The index of the target in force at `time_s`, -1 before the first.
-int TargetAt(const std::vector<ExperimentTarget>& targets, double time_s) {
-  for (size_t i = targets.size(); i-- > 0;) {
-    if (time_s >= targets[i].start_s) return static_cast<int>(i);
-  }
-  return -1;
-}
-
 // Every truth sample of a run with its target: out/<mode>/tip_path.csv.
 std::string TipPathCsv(const ExperimentReport& report, const ExperimentRun& run) {
   std::string csv =
@@ -314,9 +308,8 @@ std::string TipPathCsv(const ExperimentReport& report, const ExperimentRun& run)
   for (const ConfigurationSample& sample : run.truth) {
     const int index = TargetAt(report.targets, sample.time_s);
     if (index < 0) continue;
-    const Vec3 tip = BaseFromTip(sample.q, report.rest).translation();
-    const Vec3 goal =
-        BaseFromTip(report.targets[static_cast<size_t>(index)].q, report.rest).translation();
+    const Vec3 tip = TipOf(sample.q, report.rest);
+    const Vec3 goal = TipOf(report.targets[static_cast<size_t>(index)].q, report.rest);
     std::snprintf(row, sizeof(row),
                   "%.4f,%d,%.9g,%.9g,%.9g,%.9g,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f\n", sample.time_s,
                   index + 1, sample.q(0), sample.q(1), sample.q(2), sample.q(3), tip.x(), tip.y(),
@@ -379,14 +372,6 @@ bool RunPhases(const ExperimentArgs& args, const DemoPlan& plan, const DemoSetti
     PrintRunSummary(report.runs.back(), log);
   }
   return true;
-}
-
-nlohmann::json ProgramsToJson(const std::vector<ProgramEnd>& programs) {
-  nlohmann::json list = nlohmann::json::array();
-  for (const ProgramEnd& end : programs) {
-    list.push_back({{"name", end.name}, {"how", end.how}, {"clean", end.clean}});
-  }
-  return list;
 }
 
 nlohmann::json RunToJson(const ExperimentRun& run) {

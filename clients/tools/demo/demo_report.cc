@@ -98,6 +98,8 @@ nlohmann::json ReplayToJson(const ReplayCheck& c) {
           {"replay_only", c.replay_only}};
 }
 
+}  // namespace
+
 nlohmann::json ProgramsToJson(const std::vector<ProgramEnd>& programs) {
   nlohmann::json out = nlohmann::json::array();
   for (const ProgramEnd& end : programs) {
@@ -105,8 +107,6 @@ nlohmann::json ProgramsToJson(const std::vector<ProgramEnd>& programs) {
   }
   return out;
 }
-
-}  // namespace
 
 std::string ProgressLine(const LiveScorer::Report& s, double elapsed_s, double duration_s) {
   std::ostringstream line;

@@ -37,5 +37,7 @@ void PrintLiveSummary(const LiveDemoReport& report, std::ostream& out);
 void PrintReplayCheck(const ReplayCheck& check, std::ostream& out);
 
 nlohmann::json LiveReportToJson(const LiveDemoReport& report);
+// How each program ended: [{name, ended, clean}], for the reports.
+nlohmann::json ProgramsToJson(const std::vector<ProgramEnd>& programs);
 
 }  // namespace shapesense

@@ -5,6 +5,7 @@
 #include <string>
 #include <thread>
 
+#include "clients/tools/demo/live_demo.h"
 #include "libs/camera/rig_yaml.h"
 #include "runtime/file_io.h"
 
@@ -14,6 +15,19 @@ using Clock = std::chrono::steady_clock;
 
 double SecondsSince(Clock::time_point start) {
   return std::chrono::duration<double>(Clock::now() - start).count();
+}
+
+DemoSettings BaseDemoSettings(const fs::path& bin_dir, const fs::path& lcm_logger,
+                              const fs::path& out, const Rig& rig, double rate_hz, uint32_t seed) {
+  DemoSettings settings;
+  settings.bin_dir = bin_dir.empty() ? ExecutableDir() : bin_dir;
+  settings.lcm_logger = lcm_logger.empty() ? FindOnPath("lcm-logger") : lcm_logger;
+  if (settings.lcm_logger.empty()) settings.lcm_logger = "/usr/bin/lcm-logger";  // named as missing
+  settings.out = fs::absolute(out);
+  for (const Camera& camera : rig.cameras) settings.camera_names.push_back(camera.name);
+  settings.rate_hz = rate_hz;
+  settings.seed = seed;
+  return settings;
 }
 
 // A fresh output folder with the rig file (and the simulated cameras' config).

@@ -19,6 +19,14 @@ namespace shapesense {
 // How long a program may take to come up (a sanitizer build's carving table).
 inline constexpr auto kDemoStartTimeout = std::chrono::seconds(120);
 
+// Settings for `rig`'s cameras over GigE, the programs in `bin_dir` (empty:
+// beside this executable) and lcm-logger at `lcm_logger` (empty: on $PATH),
+// writing to `out`; the rest are DemoSettings' defaults.
+DemoSettings BaseDemoSettings(const std::filesystem::path& bin_dir,
+                              const std::filesystem::path& lcm_logger,
+                              const std::filesystem::path& out, const Rig& rig, double rate_hz,
+                              uint32_t seed);
+
 // A fresh output folder with the rig file (and the simulated cameras' config).
 void PrepareOutput(const DemoPlan& plan, const Rig& rig);
 // Says so when the kernel caps socket buffers below what image receivers ask.

@@ -31,16 +31,10 @@ void CheckArgs(const LiveDemoArgs& args) {
 }
 
 DemoSettings MakeSettings(const LiveDemoArgs& args, const Rig& rig) {
-  DemoSettings settings;
-  settings.bin_dir = args.bin_dir.empty() ? ExecutableDir() : args.bin_dir;
-  settings.lcm_logger = args.lcm_logger.empty() ? FindOnPath("lcm-logger") : args.lcm_logger;
-  if (settings.lcm_logger.empty()) settings.lcm_logger = "/usr/bin/lcm-logger";  // named as missing
-  settings.out = fs::absolute(args.out);
+  DemoSettings settings =
+      BaseDemoSettings(args.bin_dir, args.lcm_logger, args.out, rig, args.rate_hz, args.seed);
   settings.cameras = args.cameras;
-  for (const Camera& camera : rig.cameras) settings.camera_names.push_back(camera.name);
-  settings.rate_hz = args.rate_hz;
   settings.duration_s = args.duration_s;
-  settings.seed = args.seed;
   return settings;
 }
 
