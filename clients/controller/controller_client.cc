@@ -25,13 +25,13 @@ constexpr uint32_t kHoldReasons = kGateInvalidProposal | kGateEmergencyStop | kG
                                   kGateAwaitingSensing | kGateSensingStale | kGateInvalidPeriod |
                                   kGateStoppedUntilRearmed;
 
+// Keeps the newest `capacity`; true when the oldest had to go.
 template <class T>
-void PushBounded(std::deque<T>& queue, T&& item, size_t capacity, int64_t* dropped) {
-  if (queue.size() >= capacity) {
-    queue.pop_front();
-    ++*dropped;
-  }
+bool PushBounded(std::deque<T>& queue, T&& item, size_t capacity) {
+  const bool full = queue.size() >= capacity;
+  if (full) queue.pop_front();
   queue.push_back(std::move(item));
+  return full;
 }
 
 int8_t ModeOf(ControlMode mode) {
@@ -78,17 +78,17 @@ void ControllerClient::Subscribe() {
   // Callbacks only queue; the step does the work.
   bus_.Subscribe<shape_t>(channels::kShape, [this](shape_t&& shape, const std::string&, int64_t) {
     status_.Received();
-    PushBounded(pending_shapes_, std::move(shape), kShapeQueue, &counters_.inputs_dropped);
+    if (PushBounded(pending_shapes_, std::move(shape), kShapeQueue)) InputDropped();
   });
   bus_.Subscribe<estop_t>(channels::kEstop, [this](estop_t&& estop, const std::string&, int64_t) {
     status_.Received();
-    PushBounded(pending_estops_, std::move(estop), kEstopQueue, &counters_.inputs_dropped);
+    if (PushBounded(pending_estops_, std::move(estop), kEstopQueue)) InputDropped();
   });
   if (!setup_.client.stream_targets()) return;
   bus_.Subscribe<configuration_target_t>(
       channels::kTarget, [this](configuration_target_t&& target, const std::string&, int64_t) {
         status_.Received();
-        PushBounded(pending_targets_, std::move(target), kTargetQueue, &counters_.inputs_dropped);
+        if (PushBounded(pending_targets_, std::move(target), kTargetQueue)) InputDropped();
       });
 }
 
@@ -128,10 +128,15 @@ void ControllerClient::DrainBus() {
   }
 }
 
+// More came between two steps than the queues keep (or the tip solver's).
+void ControllerClient::InputDropped() {
+  ++counters_.inputs_dropped;
+  status_.Dropped();
+}
+
 void ControllerClient::AfterMessage() {
-  if (bus_.Rejected() != bus_rejections_seen_) {
-    counters_.messages_rejected += bus_.Rejected() - bus_rejections_seen_;
-    bus_rejections_seen_ = bus_.Rejected();
+  if (bus_.Rejected() != counters_.messages_rejected) {
+    counters_.messages_rejected = bus_.Rejected();
     counters_.last_message_rejection = bus_.LastRejection();
     Event("message rejected: " + bus_.LastRejection());
   }
@@ -199,7 +204,7 @@ void ControllerClient::TakeTargets(double time, int64_t now) {
       RejectTarget(why);
     } else if (target.kind == TargetKind::kTipPosition) {
       with_tip_solver_[receipt] = message;
-      if (!tip_worker_->Submit({receipt, target})) ++counters_.inputs_dropped;
+      if (!tip_worker_->Submit({receipt, target})) InputDropped();
     } else {
       ApplyTarget(receipt, resolver_.Resolve(target), message, time, now);
     }
@@ -234,18 +239,17 @@ void ControllerClient::ApplyTarget(int64_t receipt, const ResolvedTarget& resolv
   applied_receipt_ = receipt;
   // The move starts from where the target is now, so a new target mid-move
   // does not jump.
-  const Configuration from = has_streamed_target_ ? ramp_.At(time) : resolved.configuration;
+  const Configuration from = has_streamed_target() ? ramp_.At(time) : resolved.configuration;
   const int64_t start = message.start_utime != 0 ? message.start_utime : now;
   ramp_ = {from, resolved.configuration, SecondsSinceStart(start), message.duration_s};
-  has_streamed_target_ = true;
   ++counters_.targets_accepted;
   Event("target accepted" + (message.source.empty() ? "" : " from " + message.source));
 }
 
 bool ControllerClient::TargetNow(double time, Configuration* target) const {
   if (setup_.client.stream_targets()) {
-    if (has_streamed_target_) *target = ramp_.At(time);
-    return has_streamed_target_;
+    if (has_streamed_target()) *target = ramp_.At(time);
+    return has_streamed_target();
   }
   *target = TargetAt(setup_.trajectory, time);
   return true;
@@ -258,9 +262,11 @@ bool ControllerClient::ReadActuators() {
       throw ActuatorError(status.reason.empty() ? ActuatorStateName(status.state) : status.reason);
     }
     const ActuatorPositions positions = driver_.ReadPositions();
-    if (static_cast<int>(positions.mm.size()) == model_.num_tendons()) {
-      measured_ = ToVector(positions.mm);
+    if (static_cast<int>(positions.mm.size()) != model_.num_tendons()) {
+      throw ActuatorError("read " + std::to_string(positions.mm.size()) + " positions for " +
+                          std::to_string(model_.num_tendons()) + " tendons");
     }
+    measured_ = ToVector(positions.mm);
     return true;
   } catch (const ActuatorError& e) {
     Fail(e.what());
@@ -269,7 +275,6 @@ bool ControllerClient::ReadActuators() {
 }
 
 void ControllerClient::Fail(const std::string& why) {
-  driver_failed_ = true;
   error_ = "actuators (" + driver_.description() + ") failed: " + why;
   driver_.Stop();  // whatever can still be reached holds
   status_.Error(error_);
@@ -285,7 +290,7 @@ const StepRecord& ControllerClient::Step() {
   last_time_ = record_.time;
   TakeShapes(now);
   if (tip_worker_) TakeTargets(record_.time, now);
-  if (!driver_failed_ && ReadActuators()) {
+  if (!driver_failed() && ReadActuators()) {
     Control(dt);
   } else {
     record_.command = gate_->command();
@@ -409,10 +414,10 @@ void ControllerClient::PublishState() {
   state.header.utime = record_.utime;
   const int n = static_cast<int>(measured_.size());
   state.num_tendons = n;
-  const Eigen::VectorXd tensions = model_.Tensions(measured_);
+  const Eigen::VectorXd tensions = gate_->envelope().Tensions(measured_);
   const SafetyEnvelope& envelope = gate_->envelope();
   for (int i = 0; i < n; ++i) {
-    int32_t fault = driver_failed_ ? tendon_state_t::FAULT_LINK : 0;
+    int32_t fault = driver_failed() ? tendon_state_t::FAULT_LINK : 0;
     if (tensions(i) < 0.0) fault |= tendon_state_t::FAULT_SLACK;
     if (measured_(i) < envelope.low()(i) || measured_(i) > envelope.high()(i)) {
       fault |= tendon_state_t::FAULT_LIMIT;
@@ -450,7 +455,7 @@ service_status_t ControllerClient::StatusSnapshot() {
 
 void ControllerClient::Finish(const std::string& why) {
   if (finished_) return;
-  if (started() && !driver_failed_) {
+  if (started() && !driver_failed()) {
     stopping_ = true;
     Event("stopping: " + why);
     Step();  // the gate stops; the row says so

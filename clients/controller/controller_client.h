@@ -107,6 +107,9 @@ class ControllerClient {
  private:
   void Subscribe();
   void AfterMessage();
+  void InputDropped();
+  bool has_streamed_target() const { return applied_receipt_ >= 0; }
+  bool driver_failed() const { return !error_.empty(); }
   void ReactToEmergencyStops();
   void TakeShapes(int64_t now);
   void TakeTargets(double time, int64_t now);
@@ -145,14 +148,12 @@ class ControllerClient {
   std::deque<shape_t> pending_shapes_;
   std::deque<configuration_target_t> pending_targets_;
   std::deque<estop_t> pending_estops_;
-  int64_t bus_rejections_seen_ = 0;
 
   int64_t start_utime_ = 0;
   double last_time_ = 0.0;
   SensedConfiguration sensed_;
   int64_t sensed_seq_ = -1;
   int64_t sensed_trigger_utime_ = 0;
-  bool has_streamed_target_ = false;
   int64_t next_receipt_ = 0;      // order of arrival of streamed targets
   int64_t applied_receipt_ = -1;  // the newest one in use
   std::map<int64_t, configuration_target_t> with_tip_solver_;
@@ -171,7 +172,6 @@ class ControllerClient {
   bool was_stopped_ = false;
   bool stopping_ = false;
   bool finished_ = false;
-  bool driver_failed_ = false;
   std::string error_;
 };
 

@@ -48,6 +48,15 @@ ControllerOverrides OverridesGiven(const CLI::App& app, const CommandLine& line)
   return overrides;
 }
 
+// The actuator link's counters, for the summary.
+void PrintLinkHealth(ActuatorDriver& driver, std::ostream& out) {
+  const ActuatorHealth health = driver.Health();
+  out << kName << ": actuator link (" << driver.description() << "): " << health.connects
+      << " connects, " << health.timeouts << " timeouts, " << health.retries << " retries, "
+      << health.corrupt_replies << " corrupt replies, " << health.rejected_requests
+      << " requests refused, last round trip " << health.round_trip_us << " us" << std::endl;
+}
+
 void PrintSummary(ControllerClient& client, const ControllerLog& log, std::ostream& out) {
   const ControllerCounters& c = client.counters();
   const StepRecord& last = client.last_step();
@@ -79,6 +88,7 @@ int RunController(const ControllerSetup& setup, const std::atomic<bool>& stop, s
   }
   const int code = RunControllerLoop(client, stop);
   PrintSummary(client, log, out);
+  PrintLinkHealth(*driver, out);
   if (code != 0) out << kName << ": failed: " << client.error() << std::endl;
   return code;
 }

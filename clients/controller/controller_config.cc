@@ -40,16 +40,8 @@ bool IsCsv(const fs::path& path) {
 ControllerClientOptions ReadClientOptions(const fs::path& config,
                                           const ControllerOverrides& overrides) {
   const std::string source = config.string();
-  YAML::Node node;
-  try {
-    node = YAML::Load(ReadTextFile(config));
-  } catch (const YAML::Exception& e) {
-    throw InputError(source + ": not valid YAML: " + e.what());
-  }
-  ControllerClientOptions options = OptionsFromYaml<ControllerClientOptions>(node, source);
-  const auto resolve = [&](std::string& path) {
-    path = ResolveAgainstConfig(config, path).string();
-  };
+  ControllerClientOptions options = LoadOptionsFile<ControllerClientOptions>(config);
+  const auto resolve = [&](std::string& path) { path = ResolveConfigPath(config, path).string(); };
   for (std::string* path : {&options.controller, &options.actuators, &options.manipulator,
                             &options.log.csv, &options.log.lcm}) {
     resolve(*path);
@@ -96,21 +88,13 @@ std::string ControllerClientOptions::Validate() const {
   return log.Validate();
 }
 
-fs::path ResolveAgainstConfig(const fs::path& config_file, const std::string& path) {
-  if (path.empty() || fs::path(path).is_absolute()) return path;
-  return config_file.parent_path() / path;
-}
-
 ControllerSetup LoadControllerSetup(const fs::path& config, const ControllerOverrides& overrides) {
   ControllerSetup setup;
   setup.source = config.string();
   setup.client = ReadClientOptions(config, overrides);
   const ControllerClientOptions& client = setup.client;
-  setup.controller = Within(setup.source, "controller", [&] {
-    return client.controller.empty()
-               ? ControllerOptions{}
-               : ParseControllerYaml(ReadTextFile(client.controller), client.controller);
-  });
+  setup.controller = Within(setup.source, "controller",
+                            [&] { return LoadOptionsFile<ControllerOptions>(client.controller); });
   if (overrides.mode) {
     ControlMode mode{};
     if (!ParseControlMode(*overrides.mode, &mode)) {

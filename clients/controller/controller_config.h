@@ -104,8 +104,4 @@ struct ControllerSetup {
 ControllerSetup LoadControllerSetup(const std::filesystem::path& config,
                                     const ControllerOverrides& overrides = {});
 
-// `path` against the folder of `config_file` (unless absolute or empty).
-std::filesystem::path ResolveAgainstConfig(const std::filesystem::path& config_file,
-                                           const std::string& path);
-
 }  // namespace shapesense

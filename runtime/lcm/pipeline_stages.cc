@@ -71,12 +71,6 @@ RigSetup LoadRigSetup(const fs::path& rig_file, const fs::path& background_folde
   return setup;
 }
 
-fs::path ResolveConfigPath(const fs::path& config_file, const std::string& value) {
-  const fs::path path(value);
-  if (path.empty() || path.is_absolute() || config_file.empty()) return path;
-  return config_file.parent_path() / path;
-}
-
 std::vector<std::string> CameraNames(const Rig& rig) {
   std::vector<std::string> names;
   for (const Camera& camera : rig.cameras) names.push_back(camera.name);

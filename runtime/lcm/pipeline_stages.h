@@ -15,6 +15,7 @@
 #include "libs/centerline/shape_estimator.h"
 #include "libs/mechanics/configuration_sensing.h"
 #include "libs/silhouette/silhouette.h"
+#include "runtime/config_file.h"
 #include "runtime/lcm/frame_set_assembler.h"
 #include "shapesense/shape_t.hpp"
 #include "shapesense/voxel_cloud_t.hpp"
@@ -32,10 +33,6 @@ struct RigSetup {
 // backgrounds. InputError naming the file on anything missing or malformed.
 RigSetup LoadRigSetup(const std::filesystem::path& rig_file,
                       const std::filesystem::path& background_folder);
-
-// A path from a config file: relative ones are relative to the config's folder.
-std::filesystem::path ResolveConfigPath(const std::filesystem::path& config_file,
-                                        const std::string& value);
 
 std::vector<std::string> CameraNames(const Rig& rig);
 

@@ -46,14 +46,6 @@ std::string ExpectFinite(const std::string& key, const std::array<double, 3>& va
   return "";
 }
 
-// A relative path in a config file is relative to the file's folder (as
-// every service's config; runtime/lcm/pipeline_stages.h has the same rule).
-std::filesystem::path Resolve(const std::filesystem::path& config_file, const std::string& value) {
-  const std::filesystem::path path(value);
-  if (path.empty() || path.is_absolute() || config_file.empty()) return path;
-  return config_file.parent_path() / path;
-}
-
 Eigen::VectorXd Initial(const ManipulatorOptions& model, const PlantWorldOptions& options) {
   if (options.initial_displacements.empty()) {
     return Eigen::VectorXd::Zero(static_cast<Eigen::Index>(model.tendons.size()));
@@ -164,7 +156,7 @@ Pose3 PlantWorldOptions::WorldFromBase() const {
 
 PlantWorldSetup LoadPlantWorldSetup(const std::filesystem::path& config_file) {
   PlantWorldSetup setup{LoadOptionsFile<PlantWorldOptions>(config_file), {}};
-  setup.options.manipulator = Resolve(config_file, setup.options.manipulator).string();
+  setup.options.manipulator = ResolveConfigPath(config_file, setup.options.manipulator).string();
   setup.model =
       ParseManipulatorYaml(ReadTextFile(setup.options.manipulator), setup.options.manipulator);
   if (const std::string error = Misfit(setup.model, setup.options); !error.empty()) {
