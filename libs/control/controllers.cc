@@ -8,6 +8,13 @@ namespace shapesense {
 namespace {
 
 // The closed loop's controlled quantities (kappa_x, kappa_z, eps1).
+// What a unit error in (kappa_x, kappa_z, eps1) moves the tip, mm: L1^2 / 2
+// for the curvatures, L1 for the strain. Weighs them so that they compare.
+Eigen::Vector3d TipWeights(const TendonModel& model) {
+  const double distal = model.lengths().distal;
+  return {distal * distal / 2.0, distal * distal / 2.0, distal};
+}
+
 Eigen::Vector3d Controlled(const Configuration& q) {
   return {q(kKappaX), q(kKappaZ), q(kStrainDistal)};
 }
@@ -66,8 +73,7 @@ Eigen::Vector3d ClosedLoopController::Bounded(const Eigen::Vector3d& correction)
 Eigen::Vector3d ClosedLoopController::WithoutWindup(const Eigen::Vector3d& increment,
                                                     const Eigen::Vector3d& shortfall) const {
   // In tip millimetres, so that curvature and strain compare.
-  const double distal = model_.lengths().distal;
-  const Eigen::Vector3d weights(distal * distal / 2.0, distal * distal / 2.0, distal);
+  const Eigen::Vector3d weights = TipWeights(model_);
   const Eigen::Vector3d missed = weights.cwiseProduct(shortfall);
   if (missed.norm() < kCarriedOut) return increment;
   const Eigen::Vector3d direction = missed.normalized();
@@ -81,11 +87,11 @@ Eigen::Vector3d ClosedLoopController::WithoutWindup(const Eigen::Vector3d& incre
 // The error that counts toward the integral: each part (the curvatures,
 // eps1) only while the tip motion it stands for is beyond the deadband.
 Eigen::Vector3d ClosedLoopController::OutsideDeadband(const Eigen::Vector3d& error) const {
-  const double distal = model_.lengths().distal;
+  const Eigen::Vector3d motion = TipWeights(model_).cwiseProduct(error);
   const double deadband = options_.closed_loop.integral_deadband_mm;
   Eigen::Vector3d counted = error;
-  if (distal * distal / 2.0 * error.head<2>().norm() <= deadband) counted.head<2>().setZero();
-  if (distal * std::abs(error(2)) <= deadband) counted(2) = 0.0;
+  if (motion.head<2>().norm() <= deadband) counted.head<2>().setZero();
+  if (std::abs(motion(2)) <= deadband) counted(2) = 0.0;
   return counted;
 }
 
@@ -118,7 +124,7 @@ Eigen::VectorXd ClosedLoopController::Propose(const ControlInput& input) {
 ModelLessController::ModelLessController(const TendonModel& model, const ControllerOptions& options)
     : model_(model), options_(options) {
   CheckOptions(model, options);
-  weight_ = model.lengths().distal * model.lengths().distal / 2.0;
+  weight_ = TipWeights(model)(0);
   model_jacobian_ = weight_ * model.actuation().topRows<2>();
   jacobian_ = model_jacobian_;
 }

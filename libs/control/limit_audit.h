@@ -29,8 +29,6 @@ class LimitAudit {
   // A command sent at `utime` (µs, the sender's clock); the rate is checked
   // against the previous command.
   void Check(const Eigen::VectorXd& command, int64_t utime);
-  // Forget the previous command (a new run starts from where the actuators stand).
-  void Restart() { previous_utime_ = -1; }
 
   const LimitViolations& violations() const { return violations_; }
   int64_t commands() const { return commands_; }

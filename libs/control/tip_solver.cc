@@ -17,9 +17,12 @@ using Residual = std::function<Eigen::VectorXd(const Eigen::VectorXd&)>;
 // eps1 * kStrainScale.
 constexpr double kStrainScale = 100.0;
 
-Eigen::MatrixXd NumericJacobian(const Residual& residual, const Eigen::VectorXd& x) {
+// `residuals`: the residual's size (known: evaluating it only for its size
+// costs a minimum-tension solve on the shell).
+Eigen::MatrixXd NumericJacobian(const Residual& residual, const Eigen::VectorXd& x,
+                                Eigen::Index residuals) {
   constexpr double kStep = 1e-7;
-  Eigen::MatrixXd jacobian(residual(x).size(), x.size());
+  Eigen::MatrixXd jacobian(residuals, x.size());
   for (int j = 0; j < x.size(); ++j) {
     Eigen::VectorXd plus = x, minus = x;
     plus(j) += kStep;
@@ -34,7 +37,7 @@ Eigen::VectorXd MinimizeSquares(const Residual& residual, Eigen::VectorXd x) {
   double lambda = 1e-3;
   Eigen::VectorXd r = residual(x);
   for (int iteration = 0; iteration < 200 && r.norm() > 1e-9; ++iteration) {
-    const Eigen::MatrixXd jacobian = NumericJacobian(residual, x);
+    const Eigen::MatrixXd jacobian = NumericJacobian(residual, x, r.size());
     const Eigen::MatrixXd normal = jacobian.transpose() * jacobian;
     const Eigen::VectorXd gradient = jacobian.transpose() * r;
     bool improved = false;

@@ -202,7 +202,7 @@ std::string CheckFit(const ArcFit& fit, const ConfigurationSensingOptions& optio
   return "";
 }
 
-void FillResult(const ArcFit& fit, const SectionMeasurement& m, SensedConfiguration* result) {
+void FillResult(const ArcFit& fit, const SectionMeasurement& m, ConfigurationMeasurement* result) {
   result->q = fit.configuration;
   result->q(kStrainProximal) = m.strains(kStrainProximal);
   result->covariance = fit.covariance;
@@ -280,10 +280,10 @@ std::string ConfigurationSensingOptions::Validate() const {
   return "";
 }
 
-SensedConfiguration SenseConfiguration(const SensedCenterline& shape,
-                                       const ManipulatorGeometry& geometry,
-                                       const ConfigurationSensingOptions& options) {
-  SensedConfiguration result;
+ConfigurationMeasurement SenseConfiguration(const SensedCenterline& shape,
+                                            const ManipulatorGeometry& geometry,
+                                            const ConfigurationSensingOptions& options) {
+  ConfigurationMeasurement result;
   result.world_from_base = geometry.world_from_base;
   const std::vector<double> arc =
       shape.arc_length.empty() ? CumulativeArcLength(shape.centerline) : shape.arc_length;

@@ -116,7 +116,9 @@ struct SensedCenterline {
   std::vector<double> marker_arc_length;  // tape markers, base → tip, same origin
 };
 
-struct SensedConfiguration {
+// q as measured from one sensed shape (not libs/control's SensedConfiguration,
+// the controller's view of the newest sample).
+struct ConfigurationMeasurement {
   bool valid = false;
   std::string reason;  // why not, when not valid
   Configuration q = Configuration::Zero();
@@ -133,8 +135,8 @@ struct SensedConfiguration {
 // or geometry that fail validation, a tape marker missing or extra, markers
 // that do not fit the layout, a section too short, a fit that did not
 // converge or does not fit).
-SensedConfiguration SenseConfiguration(const SensedCenterline& shape,
-                                       const ManipulatorGeometry& geometry,
-                                       const ConfigurationSensingOptions& options);
+ConfigurationMeasurement SenseConfiguration(const SensedCenterline& shape,
+                                            const ManipulatorGeometry& geometry,
+                                            const ConfigurationSensingOptions& options);
 
 }  // namespace shapesense

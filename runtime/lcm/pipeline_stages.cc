@@ -159,7 +159,7 @@ std::string ShapeStage::ExtractSilhouettes(const FrameSet& set, ShapeOutput* out
 }
 
 void ShapeStage::SenseConfigurationOf(ShapeOutput* out) const {
-  out->configuration = SensedConfiguration{};
+  out->configuration = ConfigurationMeasurement{};
   if (!configuration_) return;
   const ShapeEstimate& estimate = out->estimate;
   if (!estimate.valid) {

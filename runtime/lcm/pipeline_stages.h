@@ -90,7 +90,7 @@ struct ShapeOutput {
   ShapeEstimate estimate;  // as measured (shape_t has no tube radius)
   // When the stage senses q: q (message.has_configuration, q,
   // configuration_residual_mm) or why not (reason); else invalid, no reason.
-  SensedConfiguration configuration;
+  ConfigurationMeasurement configuration;
   // Set when the shape was measured without the silhouettes it should have
   // had (the frame-set was missing or did not decode): the reason.
   std::string warning;

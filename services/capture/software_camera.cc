@@ -51,14 +51,11 @@ bool SoftwareCamera::Grab(std::chrono::milliseconds timeout, CameraFrame* frame)
   int64_t index = 0;
   cv::Mat image;
   if (NextDue(timeout, &trigger, &index)) image = MakeImage(index, trigger.utime);
+  const bool made = !image.empty();
+  if (made) Stamp(std::move(image), trigger, index, frame);  // converts: outside the lock
   std::lock_guard lock(stats_mutex_);
-  if (image.empty()) {
-    ++stats_.timeouts;
-    return false;
-  }
-  Stamp(std::move(image), trigger, index, frame);
-  ++stats_.frames;
-  return true;
+  ++(made ? stats_.frames : stats_.timeouts);
+  return made;
 }
 
 void SoftwareCamera::Stamp(cv::Mat image, const QueuedTrigger& trigger, int64_t index,

@@ -8,6 +8,7 @@
 #include <future>
 #include <stdexcept>
 
+#include "services/capture/genicam_pixel_formats.h"
 #include "services/rig_sim/raw_image.h"
 
 namespace shapesense {
@@ -21,7 +22,6 @@ constexpr size_t kSerialLimit = 15;  // GigE Vision serial numbers hold 16 bytes
 // spins through the last millisecond of every period: at 1 kHz it spun all
 // the time, about a third of the rig-sim's CPU at 30 Hz.
 constexpr double kTriggerPollHz = 250.0;
-constexpr uint32_t kRgb8 = 0x02180014u;
 // Render threads: all cores but one. A camera's own thread answers its
 // client (GigE Vision control) and sends its images; it hands the rendering
 // to these threads, which run at a lower priority. Rendering in the camera's
@@ -203,7 +203,7 @@ void FakeCameraServer::Start(int camera) {
   arv_fake_camera_write_register(fake, ARV_FAKE_CAMERA_REGISTER_SENSOR_HEIGHT, height);
   arv_fake_camera_write_register(fake, ARV_FAKE_CAMERA_REGISTER_WIDTH, width);
   arv_fake_camera_write_register(fake, ARV_FAKE_CAMERA_REGISTER_HEIGHT, height);
-  arv_fake_camera_write_register(fake, ARV_FAKE_CAMERA_REGISTER_PIXEL_FORMAT, kRgb8);
+  arv_fake_camera_write_register(fake, ARV_FAKE_CAMERA_REGISTER_PIXEL_FORMAT, genicam::kRgb8);
   arv_fake_camera_set_trigger_frequency(fake, kTriggerPollHz);
   arv_fake_camera_set_fill_pattern(fake, &FillPattern, &slot);
   g_object_set(gv, "gvsp-lost-ratio", packet_loss_.load(), nullptr);

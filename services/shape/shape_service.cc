@@ -111,9 +111,10 @@ ShapeService::ShapeService(const ShapeServiceOptions& options, RigSetup setup, L
           options.queue_capacity, status_, "voxel cloud",
           [](const Job& job) { return NameOf(job.voxels); },
           [this](Job& job) { MeasureAndPublish(job); }) {
-  bus_.Subscribe<voxel_cloud_t>(channels::kVoxels,
-                                [this](const voxel_cloud_t& voxels, const std::string&,
-                                       int64_t receive_utime) { OnVoxels(voxels, receive_utime); });
+  bus_.Subscribe<voxel_cloud_t>(
+      channels::kVoxels, [this](voxel_cloud_t&& voxels, const std::string&, int64_t receive_utime) {
+        OnVoxels(std::move(voxels), receive_utime);
+      });
   if (stage_.wants_images()) {
     bus_.Subscribe<image_t>(channels::kImagePattern,
                             [this](image_t&& image, const std::string&, int64_t receive_utime) {
@@ -162,7 +163,7 @@ void ShapeService::OnFrameSet(FrameSet set) {
   }
 }
 
-void ShapeService::OnVoxels(const voxel_cloud_t& voxels, int64_t receive_utime) {
+void ShapeService::OnVoxels(voxel_cloud_t&& voxels, int64_t receive_utime) {
   status_.Received();
   // A full check is cheap (a few µs for a tube's thousands of voxels) and
   // keeps a malformed cloud from waiting for images it will never use.
@@ -172,18 +173,18 @@ void ShapeService::OnVoxels(const voxel_cloud_t& voxels, int64_t receive_utime) 
     return;
   }
   if (!stage_.wants_images()) {
-    worker_.Push({voxels, std::nullopt});
+    worker_.Push({std::move(voxels), std::nullopt});
     return;
   }
   const FrameSetKey key = KeyOfVoxels(voxels);
   const auto images = std::find_if(waiting_images_.begin(), waiting_images_.end(),
                                    [&](const WaitingImages& w) { return KeyOf(w.set) == key; });
   if (images != waiting_images_.end()) {
-    worker_.Push({voxels, std::move(images->set)});
+    worker_.Push({std::move(voxels), std::move(images->set)});
     waiting_images_.erase(images);
     return;
   }
-  waiting_voxels_.push_back({voxels, receive_utime});
+  waiting_voxels_.push_back({std::move(voxels), receive_utime});
   if (waiting_voxels_.size() > static_cast<size_t>(options_.assembly.max_pending)) {
     worker_.Push({std::move(waiting_voxels_.front().voxels), std::nullopt});
     waiting_voxels_.pop_front();

@@ -144,7 +144,8 @@ class ShapeService {
   };
 
   void OnImage(image_t&& image, int64_t receive_utime);
-  void OnVoxels(const voxel_cloud_t& voxels, int64_t receive_utime);
+  // Moved in from the LCM callback: a cloud is tens of kB, every frame-set.
+  void OnVoxels(voxel_cloud_t&& voxels, int64_t receive_utime);
   void OnFrameSet(FrameSet set);
   void CountAssemblyDrops(int64_t before);
   void MeasureAndPublish(const Job& job);

@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "libs/control/controllers.h"
+#include "libs/control/limit_audit.h"
 #include "libs/control/safety_gate.h"
 #include "libs/mechanics/configuration_geometry.h"
 #include "libs/sim/tendon_plant.h"
@@ -32,14 +33,6 @@ struct LoopOptions {
   uint32_t seed = 1;
 };
 
-// The gate's promises, checked on every command against the previous one.
-struct Violations {
-  int range = 0;
-  int rate = 0;
-  int tension = 0;
-  int total() const { return range + rate + tension; }
-};
-
 struct TargetOutcome {
   double mean_tip_error = 0.0;  // over the measuring window, mm
   double max_tip_error = 0.0;
@@ -51,25 +44,12 @@ struct TargetOutcome {
 
 struct LoopResult {
   std::vector<TargetOutcome> targets;
-  Violations violations;
+  LimitViolations violations;  // of every command, by LimitAudit
   int steps = 0;
   // Time of the last command that moved, s (for the sensing-loss test).
   double last_motion_time = 0.0;
   uint32_t reasons_seen = 0;
 };
-
-inline void CheckCommand(const SafetyEnvelope& envelope, const Eigen::VectorXd& previous,
-                         const Eigen::VectorXd& command, double dt, Violations* violations) {
-  const SafetyLimits& limits = envelope.limits();
-  const double max_step = limits.max_rate * std::min(dt, limits.max_step_period);
-  if ((command - envelope.low()).minCoeff() < 0.0 || (envelope.high() - command).minCoeff() < 0.0) {
-    ++violations->range;
-  }
-  if ((command - previous).cwiseAbs().maxCoeff() > max_step * (1.0 + 1e-12) + 1e-15) {
-    ++violations->rate;
-  }
-  if (envelope.Tensions(command).minCoeff() < limits.min_tension - 1e-9) ++violations->tension;
-}
 
 inline Vec3 DistalTip(const Configuration& q, const TendonModel& model) {
   return BaseFromTip(q, model.lengths()).translation() -
@@ -120,6 +100,8 @@ inline LoopResult RunLoop(const ManipulatorOptions& nominal,
   TendonPlant plant(nominal, plant_options, gate.command());
   const std::unique_ptr<Controller> controller = MakeController(model, controller_options);
   SimulatedSensing sensing(options);
+  LimitAudit audit(gate.envelope());
+  audit.Check(gate.command(), 0);
   LoopResult result;
   const int steps_per_target = static_cast<int>(std::lround(options.hold_time / options.dt));
   const int measured_steps = static_cast<int>(std::lround(options.measure_time / options.dt));
@@ -139,7 +121,7 @@ inline LoopResult RunLoop(const ManipulatorOptions& nominal,
       const Eigen::VectorXd previous = gate.command();
       const GateResult gated =
           gate.Apply(controller->Propose(input), options.dt, input.sensing_age(), false);
-      CheckCommand(gate.envelope(), previous, gated.command, options.dt, &result.violations);
+      audit.Check(gated.command, std::llround(time * 1e6));
       result.reasons_seen |= gated.reasons;
       if (gated.command != previous) result.last_motion_time = time;
       plant.Command(gated.command);
@@ -155,6 +137,7 @@ inline LoopResult RunLoop(const ManipulatorOptions& nominal,
     }
     result.targets.push_back(outcome);
   }
+  result.violations = audit.violations();
   return result;
 }
 

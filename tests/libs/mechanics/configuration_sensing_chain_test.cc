@@ -140,11 +140,12 @@ class ConfigurationChainTest : public ::testing::Test {
     return ShapeEstimator(*rig_, ShapeOptions{}).Estimate(cloud, silhouettes);
   }
 
-  static SensedConfiguration Sense(const ShapeEstimate& e, const ManipulatorGeometry& geometry) {
+  static ConfigurationMeasurement Sense(const ShapeEstimate& e,
+                                        const ManipulatorGeometry& geometry) {
     return SenseConfiguration({e.centerline, e.arc_length, e.marker_arc_length}, geometry, {});
   }
 
-  static Errors Compare(const SensedConfiguration& sensed, const Configuration& q,
+  static Errors Compare(const ConfigurationMeasurement& sensed, const Configuration& q,
                         const ManipulatorGeometry& geometry, const Vec3& true_tip) {
     Errors errors;
     const double kappa = q.head<2>().norm();
@@ -175,7 +176,7 @@ class ConfigurationChainTest : public ::testing::Test {
       const Configuration& q = *scene.configuration;
       const ShapeEstimate estimate = Measure(scene, seed + static_cast<uint32_t>(i));
       EXPECT_TRUE(estimate.valid) << estimate.error;
-      const SensedConfiguration sensed = Sense(estimate, geometry);
+      const ConfigurationMeasurement sensed = Sense(estimate, geometry);
       EXPECT_TRUE(sensed.valid) << name << " " << i << ": " << sensed.reason;
       if (!sensed.valid) continue;
       const Errors e = Compare(sensed, q, geometry, TruthOf(scene).tip);
@@ -254,7 +255,7 @@ TEST_F(ConfigurationChainTest, AHiddenBandGivesTheReasonNotAConfiguration) {
   scene.tapes.pop_back();  // the distal band fell off
   const ShapeEstimate estimate = Measure(scene, 5);
   ASSERT_TRUE(estimate.valid) << estimate.error;
-  SensedConfiguration sensed = Sense(estimate, geometry);
+  ConfigurationMeasurement sensed = Sense(estimate, geometry);
   EXPECT_FALSE(sensed.valid);
   EXPECT_NE(sensed.reason.find("saw 1 tape markers, the layout has 2"), std::string::npos)
       << sensed.reason;

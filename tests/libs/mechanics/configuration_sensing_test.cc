@@ -80,7 +80,7 @@ Case ExactCase(const Configuration& q, const Pose3& world_from_base, const TapeL
   return c;
 }
 
-Vec3 PredictedTip(const SensedConfiguration& sensed, const Case& c) {
+Vec3 PredictedTip(const ConfigurationMeasurement& sensed, const Case& c) {
   return sensed.world_from_base * BaseFromTip(sensed.q, c.geometry.rest).translation();
 }
 
@@ -97,7 +97,7 @@ TEST_F(ConfigurationSensingTest, ExactShapesGiveTheirConfigurationBack) {
     options.distal_length_from_tip = trial % 3 == 0;
     const Configuration q = RandomConfiguration(rng_);
     const Case c = ExactCase(q, RandomPose(rng_), tapes, trial % 4 == 0 ? 12.0 : 0.0);
-    const SensedConfiguration sensed = SenseConfiguration(c.shape, c.geometry, options);
+    const ConfigurationMeasurement sensed = SenseConfiguration(c.shape, c.geometry, options);
     ASSERT_TRUE(sensed.valid) << sensed.reason;
     EXPECT_LT((sensed.q - q).norm(), 1e-8)
         << "trial " << trial << ": " << sensed.q.transpose() << " vs " << q.transpose();
@@ -110,7 +110,7 @@ TEST_F(ConfigurationSensingTest, ExactShapesGiveTheirConfigurationBack) {
 TEST_F(ConfigurationSensingTest, StraightConfigurationsToo) {
   const Configuration q(0.0, 0.0, 0.01, 0.02);
   const Case c = ExactCase(q, RandomPose(rng_), TapeLayout{});
-  const SensedConfiguration sensed = SenseConfiguration(c.shape, c.geometry, {});
+  const ConfigurationMeasurement sensed = SenseConfiguration(c.shape, c.geometry, {});
   ASSERT_TRUE(sensed.valid) << sensed.reason;
   EXPECT_LT((sensed.q - q).norm(), 1e-8);
 }
@@ -130,7 +130,7 @@ TEST_F(ConfigurationSensingTest, NoisyShapesStayWithinTheTargets) {
     for (Vec3& p : c.shape.centerline)
       p += Vec3(centerline_noise(rng_), centerline_noise(rng_), centerline_noise(rng_));
     for (double& s : c.shape.marker_arc_length) s += marker_noise(rng_);
-    const SensedConfiguration sensed = SenseConfiguration(c.shape, c.geometry, {});
+    const ConfigurationMeasurement sensed = SenseConfiguration(c.shape, c.geometry, {});
     ASSERT_TRUE(sensed.valid) << sensed.reason;
     const Vec3 true_tip = c.geometry.world_from_base * BaseFromTip(q, kRest).translation();
     worst_tip = std::max(worst_tip, (PredictedTip(sensed, c) - true_tip).norm());
@@ -147,7 +147,7 @@ TEST_F(ConfigurationSensingTest, TheCovarianceCarriesTheStrainsUncertainty) {
   const Case c = ExactCase(RandomConfiguration(rng_), RandomPose(rng_), TapeLayout{});
   ConfigurationSensingOptions options;
   options.marker_std = 0.2;
-  const SensedConfiguration sensed = SenseConfiguration(c.shape, c.geometry, options);
+  const ConfigurationMeasurement sensed = SenseConfiguration(c.shape, c.geometry, options);
   ASSERT_TRUE(sensed.valid) << sensed.reason;
   // eps0 from one marker over L0; eps1 from two markers over L1 - 10 mm.
   EXPECT_NEAR(std::sqrt(sensed.covariance(2, 2)), 0.2 / kRest.proximal, 1e-12);
@@ -158,7 +158,7 @@ TEST_F(ConfigurationSensingTest, AMissingOrStrayMarkerIsRefusedWithTheReason) {
   const Case c = ExactCase(RandomConfiguration(rng_), RandomPose(rng_), TapeLayout{});
   SensedCenterline missing = c.shape;
   missing.marker_arc_length.pop_back();
-  SensedConfiguration sensed = SenseConfiguration(missing, c.geometry, {});
+  ConfigurationMeasurement sensed = SenseConfiguration(missing, c.geometry, {});
   EXPECT_FALSE(sensed.valid);
   EXPECT_NE(sensed.reason.find("saw 1 tape markers, the layout has 2"), std::string::npos)
       << sensed.reason;
@@ -178,7 +178,7 @@ TEST_F(ConfigurationSensingTest, MarkersThatDoNotFitTheLayoutAreRefused) {
   // The distal band placed 60 mm before the tip in the layout, 10 mm on the tube.
   ManipulatorGeometry geometry = c.geometry;
   geometry.tapes.distal_band_before_tip = 60.0;
-  const SensedConfiguration sensed = SenseConfiguration(c.shape, geometry, {});
+  const ConfigurationMeasurement sensed = SenseConfiguration(c.shape, geometry, {});
   EXPECT_FALSE(sensed.valid);
   EXPECT_NE(sensed.reason.find("do not fit the layout: eps1"), std::string::npos) << sensed.reason;
 }
@@ -186,7 +186,7 @@ TEST_F(ConfigurationSensingTest, MarkersThatDoNotFitTheLayoutAreRefused) {
 TEST_F(ConfigurationSensingTest, AWrongBasePoseIsNamed) {
   Case c = ExactCase(Configuration(0.004, 0.002, 0.01, 0.01), RandomPose(rng_), TapeLayout{});
   c.geometry.world_from_base.translation() += c.geometry.world_from_base.linear() * Vec3(8, 0, 0);
-  const SensedConfiguration sensed = SenseConfiguration(c.shape, c.geometry, {});
+  const ConfigurationMeasurement sensed = SenseConfiguration(c.shape, c.geometry, {});
   EXPECT_FALSE(sensed.valid);
   EXPECT_NE(sensed.reason.find("off the base axis"), std::string::npos) << sensed.reason;
 }
@@ -197,7 +197,7 @@ TEST_F(ConfigurationSensingTest, ADistalSectionThatIsNoArcIsRefused) {
   for (Vec3& p : c.shape.centerline) {
     if (p.y() > kRest.proximal + 70.0) p.z() -= 0.02 * std::pow(p.y() - kRest.proximal - 70.0, 2);
   }
-  const SensedConfiguration sensed = SenseConfiguration(c.shape, c.geometry, {});
+  const ConfigurationMeasurement sensed = SenseConfiguration(c.shape, c.geometry, {});
   EXPECT_FALSE(sensed.valid);
   EXPECT_NE(sensed.reason.find("no arc"), std::string::npos) << sensed.reason;
 }
@@ -206,7 +206,7 @@ TEST_F(ConfigurationSensingTest, ATooShortDistalSectionIsRefused) {
   const Case c = ExactCase(Configuration(0.004, 0.0, 0.0, 0.0), Pose3::Identity(), TapeLayout{});
   ConfigurationSensingOptions options;
   options.min_distal_length = 200.0;
-  const SensedConfiguration sensed = SenseConfiguration(c.shape, c.geometry, options);
+  const ConfigurationMeasurement sensed = SenseConfiguration(c.shape, c.geometry, options);
   EXPECT_FALSE(sensed.valid);
   EXPECT_NE(sensed.reason.find("too short"), std::string::npos) << sensed.reason;
 }

@@ -105,7 +105,7 @@ TEST_F(ManipulatorSceneTest, SensingTheExactTruthGivesQBack) {
     ManipulatorSceneOptions options = trial % 2 == 0 ? ThreeBands() : ManipulatorSceneOptions{};
     options.spacing = 0.1;
     const GroundTruth truth = TruthOf(SceneOfConfiguration(q, kRest, world_from_base, options));
-    const SensedConfiguration sensed =
+    const ConfigurationMeasurement sensed =
         SenseConfiguration({truth.centerline, {}, truth.marker_arc_length},
                            {kRest, world_from_base, options.tapes}, {});
     ASSERT_TRUE(sensed.valid) << sensed.reason;

@@ -6,18 +6,10 @@
 #include <sstream>
 
 #include "libs/control/safety_gate.h"
+#include "libs/core/csv_fields.h"
 
 namespace shapesense::testing {
 namespace {
-
-std::vector<std::string> SplitCsv(const std::string& line) {
-  std::vector<std::string> fields;
-  std::stringstream stream(line);
-  std::string field;
-  while (std::getline(stream, field, ',')) fields.push_back(field);
-  if (!line.empty() && line.back() == ',') fields.push_back("");
-  return fields;
-}
 
 Eigen::VectorXd Vector(const ControllerCsv& csv, size_t row, const std::string& prefix, int n) {
   Eigen::VectorXd values(n);
@@ -51,9 +43,9 @@ ControllerCsv ReadControllerCsv(const std::filesystem::path& path) {
   ControllerCsv csv;
   std::ifstream in(path);
   std::string line;
-  if (std::getline(in, line)) csv.columns = SplitCsv(line);
+  if (std::getline(in, line)) csv.columns = SplitCsvFields(line);
   while (std::getline(in, line)) {
-    std::vector<std::string> fields = SplitCsv(line);
+    std::vector<std::string> fields = SplitCsvFields(line);
     if (fields.size() != csv.columns.size()) {
       ++csv.bad_rows;
       continue;
