@@ -29,12 +29,8 @@ std::array<double, 6> PoseToParameters(const Pose3& pose) {
 }
 
 Pose3 PoseFromParameters(const double* parameters) {
-  const Vec3 rotation(parameters[0], parameters[1], parameters[2]);
-  Pose3 pose = Pose3::Identity();
-  const double angle = rotation.norm();
-  if (angle > 0.0) pose.linear() = Eigen::AngleAxisd(angle, rotation / angle).toRotationMatrix();
-  pose.translation() = Vec3(parameters[3], parameters[4], parameters[5]);
-  return pose;
+  return PoseFromRotationVector(Vec3(parameters[0], parameters[1], parameters[2]),
+                                Vec3(parameters[3], parameters[4], parameters[5]));
 }
 
 cv::Mat CameraMatrixToCv(const Camera& camera) {

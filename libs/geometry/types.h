@@ -14,4 +14,16 @@ using Pose3 = Eigen::Isometry3d;
 // Ordered 3-D points, mm.
 using Polyline = std::vector<Vec3, Eigen::aligned_allocator<Vec3>>;
 
+// The pose x -> R x + translation, R the rotation by `rotation_vector`
+// (unit axis times angle, rad; OpenCV's rvec).
+inline Pose3 PoseFromRotationVector(const Vec3& rotation_vector, const Vec3& translation) {
+  Pose3 pose = Pose3::Identity();
+  const double angle = rotation_vector.norm();
+  if (angle > 0.0) {
+    pose.linear() = Eigen::AngleAxisd(angle, rotation_vector / angle).toRotationMatrix();
+  }
+  pose.translation() = translation;
+  return pose;
+}
+
 }  // namespace shapesense

@@ -227,20 +227,25 @@ std::string TapeLayout::Validate() const {
                 "distal_band_before_tip", "a positive number", distal_band_before_tip);
 }
 
+// Runs once per sensed shape (SenseConfiguration checks its inputs): the
+// messages are built only when something is wrong.
 std::string ManipulatorGeometry::Validate() const {
-  for (const std::string& error :
-       {Expect(rest.proximal > 0.0 && std::isfinite(rest.proximal), "proximal_length",
-               "a positive number", rest.proximal),
-        Expect(rest.distal > 0.0 && std::isfinite(rest.distal), "distal_length",
-               "a positive number", rest.distal),
-        tapes.Validate().empty() ? "" : "tapes." + tapes.Validate(),
-        Expect(tapes.distal_band_before_tip < rest.distal, "tapes.distal_band_before_tip",
-               "less than the distal length " + Number(rest.distal), tapes.distal_band_before_tip),
-        Expect(tapes.proximal_band_before_junction < rest.proximal,
-               "tapes.proximal_band_before_junction",
-               "less than the proximal length " + Number(rest.proximal),
-               tapes.proximal_band_before_junction)}) {
-    if (!error.empty()) return error;
+  if (!(rest.proximal > 0.0 && std::isfinite(rest.proximal))) {
+    return Expect(false, "proximal_length", "a positive number", rest.proximal);
+  }
+  if (!(rest.distal > 0.0 && std::isfinite(rest.distal))) {
+    return Expect(false, "distal_length", "a positive number", rest.distal);
+  }
+  if (const std::string error = tapes.Validate(); !error.empty()) return "tapes." + error;
+  if (!(tapes.distal_band_before_tip < rest.distal)) {
+    return Expect(false, "tapes.distal_band_before_tip",
+                  "less than the distal length " + Number(rest.distal),
+                  tapes.distal_band_before_tip);
+  }
+  if (!(tapes.proximal_band_before_junction < rest.proximal)) {
+    return Expect(false, "tapes.proximal_band_before_junction",
+                  "less than the proximal length " + Number(rest.proximal),
+                  tapes.proximal_band_before_junction);
   }
   if (!IsRigid(world_from_base)) return "world_from_base: expected a rigid transform";
   return "";

@@ -145,13 +145,7 @@ std::string PlantWorldOptions::Validate() const {
 }
 
 Pose3 PlantWorldOptions::WorldFromBase() const {
-  const Vec3 rotation(base_rotation[0], base_rotation[1], base_rotation[2]);
-  Pose3 pose = Pose3::Identity();
-  if (rotation.norm() > 0.0) {
-    pose.linear() = Eigen::AngleAxisd(rotation.norm(), rotation.normalized()).toRotationMatrix();
-  }
-  pose.translation() = Vec3(base_position[0], base_position[1], base_position[2]);
-  return pose;
+  return PoseFromRotationVector(Vec3(base_rotation.data()), Vec3(base_position.data()));
 }
 
 PlantWorldSetup LoadPlantWorldSetup(const std::filesystem::path& config_file) {
