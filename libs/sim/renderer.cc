@@ -1,5 +1,7 @@
 // RenderScene and SceneRenderer (declared in tube_scene.h).
 #include <algorithm>
+#include <array>
+#include <mutex>
 #include <cmath>
 #include <opencv2/imgproc.hpp>
 #include <stdexcept>
@@ -47,8 +49,11 @@ float Coverage(const PixelHit& hit, bool antialias) {
   return inside ? std::clamp(linear, 0.5f, 1.0f) : std::clamp(linear, 0.0f, 0.5f);
 }
 
+// The tube's layer over `rect` (image coordinates; the layer's pixel (0, 0)
+// is the rect's corner).
 TubeLayer ShadeTube(const Camera& camera, const RayTable& rays, const TubeRaster& raster,
-                    const TubeAxis& axis, const TubeScene& scene, const RenderOptions& options) {
+                    const TubeAxis& axis, const TubeScene& scene, const RenderOptions& options,
+                    const cv::Rect& rect) {
   Polyline axis_cam;
   axis_cam.reserve(axis.points.size());
   for (const Vec3& p : axis.points) axis_cam.push_back(camera.cam_from_world * p);
@@ -56,11 +61,11 @@ TubeLayer ShadeTube(const Camera& camera, const RayTable& rays, const TubeRaster
       (camera.cam_from_world.linear() *
        Vec3(options.light_direction[0], options.light_direction[1], options.light_direction[2]))
           .normalized();
-  TubeLayer layer{cv::Mat(camera.height, camera.width, CV_32F, cv::Scalar(0)),
-                  cv::Mat(camera.height, camera.width, CV_32FC3, cv::Scalar::all(0))};
+  TubeLayer layer{cv::Mat(rect.size(), CV_32F, cv::Scalar(0)),
+                  cv::Mat(rect.size(), CV_32FC3, cv::Scalar::all(0))};
   const size_t last = axis_cam.size() - 1;
-  for (int v = 0; v < camera.height; ++v) {
-    for (int u = 0; u < camera.width; ++u) {
+  for (int v = rect.y; v < rect.y + rect.height; ++v) {
+    for (int u = rect.x; u < rect.x + rect.width; ++u) {
       const PixelHit& hit = raster.at(u, v);
       const float coverage = Coverage(hit, options.antialias);
       if (coverage <= 0.0f) continue;
@@ -74,17 +79,22 @@ TubeLayer ShadeTube(const Camera& camera, const RayTable& rays, const TubeRaster
                                   direction, hit.depth)
                  : SurfaceNearestRay(axis_cam[i], axis_cam[j], axis.arc_length[i],
                                      axis.arc_length[j], direction);
-      layer.coverage.at<float>(v, u) = coverage;
-      layer.colour.at<cv::Vec3f>(v, u) = ShadedColour(options, scene, light_cam, surface);
+      layer.coverage.at<float>(v - rect.y, u - rect.x) = coverage;
+      layer.colour.at<cv::Vec3f>(v - rect.y, u - rect.x) =
+          ShadedColour(options, scene, light_cam, surface);
     }
   }
   return layer;
 }
 
-// Fraction of the backdrop's light left by the shadow: the coverage shifted
-// by the offset and blurred (at half resolution: the shadow is soft anyway).
-cv::Mat ShadowFactor(const cv::Mat& coverage, const RenderOptions& options) {
-  if (options.shadow_strength <= 0.0) return cv::Mat(coverage.size(), CV_32F, cv::Scalar(1.0));
+// Fraction of the backdrop's light left by the shadow over `out` (image
+// coordinates): the coverage shifted by the offset and blurred (at half
+// resolution: the shadow is soft anyway). `coverage` covers the image from
+// `origin` (even coordinates, even size, so that its half-resolution pixels
+// are the whole image's), with zeros around the tube wide enough for the blur.
+cv::Mat ShadowFactor(const cv::Mat& coverage, cv::Point origin, const cv::Rect& out,
+                     const RenderOptions& options) {
+  if (options.shadow_strength <= 0.0) return cv::Mat(out.size(), CV_32F, cv::Scalar(1.0));
   cv::Mat half;
   cv::resize(coverage, half, cv::Size((coverage.cols + 1) / 2, (coverage.rows + 1) / 2), 0, 0,
              cv::INTER_AREA);
@@ -94,10 +104,11 @@ cv::Mat ShadowFactor(const cv::Mat& coverage, const RenderOptions& options) {
   // Full-resolution pixel x sees half-resolution (x - offset - 0.5) / 2.
   const double ox = options.shadow_offset_px[0];
   const double oy = options.shadow_offset_px[1];
-  const cv::Matx23d full_to_half(0.5, 0.0, -0.5 * ox - 0.25, 0.0, 0.5, -0.5 * oy - 0.25);
+  const cv::Matx23d out_to_half(0.5, 0.0, 0.5 * (out.x - ox - origin.x) - 0.25, 0.0, 0.5,
+                                0.5 * (out.y - oy - origin.y) - 0.25);
   cv::Mat shadow;
-  cv::warpAffine(half, shadow, full_to_half, coverage.size(),
-                 cv::INTER_LINEAR | cv::WARP_INVERSE_MAP, cv::BORDER_CONSTANT, cv::Scalar(0));
+  cv::warpAffine(half, shadow, out_to_half, out.size(), cv::INTER_LINEAR | cv::WARP_INVERSE_MAP,
+                 cv::BORDER_CONSTANT, cv::Scalar(0));
   return 1.0 - options.shadow_strength * shadow;
 }
 
@@ -119,48 +130,127 @@ struct Vignette {
   float at(int u, int v) const { return 1.0f - column[u] - row[v]; }
 };
 
-// The frame (backdrop, shadow, tube) and the background (backdrop alone), each
-// with its own noise.
-void Compose(const Camera& camera, const TubeLayer& tube, const cv::Mat& shadow,
-             const RenderOptions& options, uint64_t seed, RenderedView* view) {
-  GaussianNoise image_noise(options.noise_sigma, MixSeed(seed, 0));
-  GaussianNoise background_noise(options.noise_sigma, MixSeed(seed, 1));
+cv::Vec3f BackdropBgr(const RenderOptions& options) {
+  return {static_cast<float>(options.backdrop_bgr[0]), static_cast<float>(options.backdrop_bgr[1]),
+          static_cast<float>(options.backdrop_bgr[2])};
+}
+
+// The frame (backdrop, shadow, tube) over `rect` of `image`, with noise
+// drawn row by row across the rect. `tube` and `shadow` cover the rect.
+void ComposeImage(const Camera& camera, const TubeLayer& tube, const cv::Mat& shadow,
+                  const cv::Rect& rect, const RenderOptions& options, uint64_t seed,
+                  cv::Mat* image) {
+  GaussianNoise noise(options.noise_sigma, MixSeed(seed, 0));
   const Vignette vignette(camera, options.backdrop_vignette);
-  const cv::Vec3f backdrop(static_cast<float>(options.backdrop_bgr[0]),
-                           static_cast<float>(options.backdrop_bgr[1]),
-                           static_cast<float>(options.backdrop_bgr[2]));
-  view->image.create(camera.height, camera.width, CV_8UC3);
-  view->background.create(camera.height, camera.width, CV_8UC3);
-  for (int v = 0; v < camera.height; ++v) {
-    const float* coverage = tube.coverage.ptr<float>(v);
-    const cv::Vec3f* colour = tube.colour.ptr<cv::Vec3f>(v);
-    const float* light = shadow.ptr<float>(v);
-    cv::Vec3b* image = view->image.ptr<cv::Vec3b>(v);
-    cv::Vec3b* background = view->background.ptr<cv::Vec3b>(v);
-    for (int u = 0; u < camera.width; ++u) {
-      const cv::Vec3f lit = backdrop * vignette.at(u, v);
-      const cv::Vec3f seen = lit * (light[u] * (1.0f - coverage[u])) + colour[u] * coverage[u];
-      for (int c = 0; c < 3; ++c) {
-        image[u][c] = cv::saturate_cast<uint8_t>(seen[c] + image_noise.Next());
-        background[u][c] = cv::saturate_cast<uint8_t>(lit[c] + background_noise.Next());
-      }
+  const cv::Vec3f backdrop = BackdropBgr(options);
+  for (int y = 0; y < rect.height; ++y) {
+    const int v = rect.y + y;
+    const float* coverage = tube.coverage.ptr<float>(y);
+    const cv::Vec3f* colour = tube.colour.ptr<cv::Vec3f>(y);
+    const float* light = shadow.ptr<float>(y);
+    cv::Vec3b* out = image->ptr<cv::Vec3b>(v) + rect.x;
+    for (int x = 0; x < rect.width; ++x) {
+      const cv::Vec3f lit = backdrop * vignette.at(rect.x + x, v);
+      const cv::Vec3f seen = lit * (light[x] * (1.0f - coverage[x])) + colour[x] * coverage[x];
+      for (int c = 0; c < 3; ++c) out[x][c] = cv::saturate_cast<uint8_t>(seen[c] + noise.Next());
     }
   }
+}
+
+// The backdrop alone, with noise of its own (`stream`).
+cv::Mat Backdrop(const Camera& camera, const RenderOptions& options, uint64_t seed,
+                 uint64_t stream) {
+  GaussianNoise noise(options.noise_sigma, MixSeed(seed, stream));
+  const Vignette vignette(camera, options.backdrop_vignette);
+  const cv::Vec3f backdrop = BackdropBgr(options);
+  cv::Mat background(camera.height, camera.width, CV_8UC3);
+  for (int v = 0; v < camera.height; ++v) {
+    cv::Vec3b* out = background.ptr<cv::Vec3b>(v);
+    for (int u = 0; u < camera.width; ++u) {
+      const cv::Vec3f lit = backdrop * vignette.at(u, v);
+      for (int c = 0; c < 3; ++c) out[u][c] = cv::saturate_cast<uint8_t>(lit[c] + noise.Next());
+    }
+  }
+  return background;
 }
 
 RenderedView RenderView(const Camera& camera, const RayTable& rays, const TubeAxis& axis,
                         const TubeScene& scene, const RenderOptions& options, uint64_t seed) {
   TubeRaster raster;
   RasterizeTube(camera, rays, axis, &raster);
-  const TubeLayer tube = ShadeTube(camera, rays, raster, axis, scene, options);
+  const cv::Rect whole(0, 0, camera.width, camera.height);
+  const TubeLayer tube = ShadeTube(camera, rays, raster, axis, scene, options, whole);
   RenderedView view;
-  Compose(camera, tube, ShadowFactor(tube.coverage, options), options, seed, &view);
+  view.image.create(camera.height, camera.width, CV_8UC3);
+  ComposeImage(camera, tube, ShadowFactor(tube.coverage, {0, 0}, whole, options), whole, options,
+               seed, &view.image);
+  view.background = Backdrop(camera, options, seed, 1);
   view.truth_mask.create(camera.height, camera.width, CV_8U);
   for (int v = 0; v < camera.height; ++v) {
     uint8_t* mask = view.truth_mask.ptr<uint8_t>(v);
     for (int u = 0; u < camera.width; ++u) mask[u] = raster.at(u, v).hit_segment >= 0 ? 255 : 0;
   }
   return view;
+}
+
+// Pre-rendered noisy backdrops of one camera: the virtual rig's images take
+// their backdrop from one of these outside the tube and its shadow.
+struct BackdropPool {
+  static constexpr size_t kFrames = 8;
+  std::array<double, 3> bgr{};
+  double vignette = -1.0;
+  double noise_sigma = -1.0;
+  std::vector<cv::Mat> frames;
+
+  bool Fits(const RenderOptions& options) const {
+    return !frames.empty() && bgr == options.backdrop_bgr &&
+           vignette == options.backdrop_vignette && noise_sigma == options.noise_sigma;
+  }
+  void Build(const Camera& camera, const RenderOptions& options) {
+    bgr = options.backdrop_bgr;
+    vignette = options.backdrop_vignette;
+    noise_sigma = options.noise_sigma;
+    frames.clear();
+    for (size_t k = 0; k < kFrames; ++k) frames.push_back(Backdrop(camera, options, 0x9001, 2 + k));
+  }
+};
+
+// The pixels the tube and its shadow can change, widened to even coordinates
+// (the shadow's half resolution); empty when the tube is out of view.
+cv::Rect TubeAndShadowRect(const TubeRaster& raster, const RenderOptions& options) {
+  if (raster.u0 > raster.u1) return {};
+  const cv::Rect tube(raster.u0, raster.v0, raster.u1 - raster.u0 + 1, raster.v1 - raster.v0 + 1);
+  // The blur's kernel reaches 4 sigma (OpenCV's float kernels), sigma being
+  // half the blur at half resolution: 2 blur px at full resolution, plus a
+  // pixel for the bilinear warp and one for the area resize.
+  const int margin = static_cast<int>(std::ceil(2.0 * options.shadow_blur_px)) + 4;
+  cv::Rect rect(tube.x - margin, tube.y - margin, tube.width + 2 * margin,
+                tube.height + 2 * margin);
+  if (options.shadow_strength > 0.0) {
+    const int ox = static_cast<int>(std::ceil(std::abs(options.shadow_offset_px[0])));
+    const int oy = static_cast<int>(std::ceil(std::abs(options.shadow_offset_px[1])));
+    rect.x -= ox;
+    rect.y -= oy;
+    rect.width += 2 * ox;
+    rect.height += 2 * oy;
+  }
+  const int x0 = std::max(0, rect.x) & ~1;
+  const int y0 = std::max(0, rect.y) & ~1;
+  const int x1 = std::min(raster.width, (rect.x + rect.width + 1) & ~1);
+  const int y1 = std::min(raster.height, (rect.y + rect.height + 1) & ~1);
+  return {x0, y0, x1 - x0, y1 - y0};
+}
+
+// The tube and its shadow drawn over the backdrop in `image`.
+void DrawTubeOver(const Camera& camera, const RayTable& rays, const TubeAxis& axis,
+                  const TubeScene& scene, const RenderOptions& options, uint64_t seed,
+                  TubeRaster* raster, cv::Mat* image) {
+  RasterizeTube(camera, rays, axis, raster);
+  const cv::Rect rect = TubeAndShadowRect(*raster, options);
+  if (rect.empty()) return;
+  const TubeLayer tube = ShadeTube(camera, rays, *raster, axis, scene, options, rect);
+  ComposeImage(camera, tube, ShadowFactor(tube.coverage, rect.tl(), rect, options), rect, options,
+               seed, image);
 }
 
 void CheckInputs(const TubeScene& scene, const RenderOptions& options) {
@@ -178,11 +268,14 @@ void CheckInputs(const TubeScene& scene, const RenderOptions& options) {
 struct SceneRenderer::Impl {
   Rig rig;
   std::vector<RayTable> rays;  // per camera
+  std::mutex pools_mutex;
+  std::vector<BackdropPool> pools;  // per camera, built on first use
 };
 
 SceneRenderer::SceneRenderer(const Rig& rig) : impl_(std::make_unique<Impl>()) {
   impl_->rig = rig;
   for (const Camera& camera : rig.cameras) impl_->rays.push_back(BuildRayTable(camera));
+  impl_->pools.resize(rig.cameras.size());
 }
 
 SceneRenderer::~SceneRenderer() = default;
@@ -200,6 +293,30 @@ std::vector<RenderedView> SceneRenderer::Render(const TubeScene& scene,
         RenderView(impl_->rig.cameras[i], impl_->rays[i], axis, scene, options, MixSeed(seed, i)));
   }
   return views;
+}
+
+cv::Mat SceneRenderer::RenderImage(size_t camera, const TubeScene& scene,
+                                   const RenderOptions& options, uint32_t seed) const {
+  CheckInputs(scene, options);
+  const Camera& model = impl_->rig.cameras.at(camera);
+  if (model.width % 2 != 0 || model.height % 2 != 0) {
+    return RenderView(model, impl_->rays[camera], TubeAxisOf(scene), scene, options,
+                      MixSeed(seed, camera))
+        .image;
+  }
+  const uint64_t view_seed = MixSeed(seed, camera);
+  cv::Mat image;
+  {
+    std::lock_guard lock(impl_->pools_mutex);
+    BackdropPool& pool = impl_->pools[camera];
+    if (!pool.Fits(options)) pool.Build(model, options);
+    pool.frames[MixSeed(view_seed, 7) % pool.frames.size()].copyTo(image);
+  }
+  // Reused across calls on this thread: the raster is 16 bytes a pixel.
+  thread_local TubeRaster raster;
+  DrawTubeOver(model, impl_->rays[camera], TubeAxisOf(scene), scene, options, view_seed, &raster,
+               &image);
+  return image;
 }
 
 std::vector<RenderedView> RenderScene(const Rig& rig, const TubeScene& scene,

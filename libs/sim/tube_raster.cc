@@ -173,6 +173,10 @@ void RasterizeTube(const Camera& camera, const RayTable& rays, const TubeAxis& a
   out->height = camera.height;
   out->pixels.assign(static_cast<size_t>(camera.width) * camera.height,
                      PixelHit{kFar, kFar, -1, -1});
+  out->u0 = 0;
+  out->v0 = 0;
+  out->u1 = -1;
+  out->v1 = -1;
   const RayTable::Bounds& image = rays.image_bounds;
   // A single point is a sphere: a segment of length zero.
   const size_t segments = axis.points.size() == 1 ? 1 : axis.points.size() - 1;
@@ -181,7 +185,13 @@ void RasterizeTube(const Camera& camera, const RayTable& rays, const TubeAxis& a
         camera.cam_from_world, axis.points[i], axis.points[std::min(i + 1, axis.points.size() - 1)],
         static_cast<int32_t>(i));
     const PixelBox box = ProjectedBox(camera, image, segment, axis.radius);
-    if (!box.empty()) CastSegment(segment, axis.radius, box, rays, out);
+    if (box.empty()) continue;
+    CastSegment(segment, axis.radius, box, rays, out);
+    const bool first = out->u0 > out->u1;
+    out->u0 = first ? box.u0 : std::min(out->u0, box.u0);
+    out->v0 = first ? box.v0 : std::min(out->v0, box.v0);
+    out->u1 = first ? box.u1 : std::max(out->u1, box.u1);
+    out->v1 = first ? box.v1 : std::max(out->v1, box.v1);
   }
 }
 

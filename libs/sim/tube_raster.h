@@ -38,6 +38,9 @@ struct TubeRaster {
   int width = 0;
   int height = 0;
   std::vector<PixelHit> pixels;
+  // The pixels any capsule may cover (the union of the boxes ray-cast),
+  // inclusive; empty (u0 > u1) when the tube is out of view.
+  int u0 = 0, v0 = 0, u1 = -1, v1 = -1;
 
   const PixelHit& at(int u, int v) const { return pixels[static_cast<size_t>(v) * width + u]; }
 };
