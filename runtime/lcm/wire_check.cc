@@ -7,7 +7,9 @@ namespace {
 constexpr size_t kHash = 8;
 constexpr size_t kHeader = 16;     // header_t: seq, utime
 constexpr size_t kStageTail = 16;  // stage_time_t after its name: duration_us, end_utime
-constexpr size_t kImageFixed = 4 + 4 + 4 + 1 + 1 + 4 + 4 + 8 + 8 + 8 + 8;  // width ... host_utime
+// width, height, row_stride, pixel_format, compression, exposure_us, gain_db,
+// trigger_seq, trigger_utime, frame_id, device_timestamp_ns, host_utime
+constexpr size_t kImageFixed = 4 + 4 + 4 + 1 + 1 + 4 + 4 + 8 + 8 + 8 + 8 + 8;
 constexpr size_t kVoxelFixed = 8 + 8 + 3 * 8 + 8 + 3 * 4;                  // trigger_seq ... dims
 constexpr size_t kShapeTail = 3 * 8 + 8 + 1 + 4 * 8 + 8 + 8;  // tip ... configuration_residual_mm
 constexpr size_t kCommandTail = 8 + 1;                        // source_trigger_seq, mode

@@ -12,7 +12,7 @@
 #include <utility>
 #include <vector>
 
-#include "services/capture/aravis_trigger_matcher.h"
+#include "services/capture/exposure_matcher.h"
 #include "services/capture/genicam_pixel_formats.h"
 
 namespace shapesense {
@@ -31,9 +31,6 @@ constexpr std::array<std::pair<const char*, uint32_t>, 7> kPixelFormats = {{
 // After this long without a frame, a timeout asks the device whether it is
 // still there (a register read), at most once per interval.
 constexpr int64_t kProbeIntervalUs = 1'000'000;
-// A frame-set trigger time at most this old is this host's: images are
-// matched against it.
-constexpr int64_t kRecentTriggerUs = 1'000'000;
 
 int64_t HostUtime() { return g_get_real_time(); }
 
@@ -60,9 +57,16 @@ std::string TakeMessage(GError*& error) {
   return message;
 }
 
+ExposureMatcherOptions MatcherOptions(const CameraConfig& config) {
+  ExposureMatcherOptions options;
+  options.max_latency_us = static_cast<int64_t>(config.trigger_latency_us);
+  return options;
+}
+
 class AravisCamera final : public CameraBackend {
  public:
-  explicit AravisCamera(CameraConfig config) : config_(std::move(config)) {}
+  explicit AravisCamera(CameraConfig config)
+      : config_(std::move(config)), matcher_(MatcherOptions(config_)) {}
   ~AravisCamera() override { Close(); }
   AravisCamera(const AravisCamera&) = delete;
   AravisCamera& operator=(const AravisCamera&) = delete;
@@ -115,7 +119,7 @@ class AravisCamera final : public CameraBackend {
   bool opened_before_ = false;
 
   mutable std::mutex mutex_;  // what Trigger() and Grab() share
-  TriggerMatcher matcher_;
+  ExposureMatcher matcher_;
   CameraStats stats_;
   std::string lost_reason_;
 };
@@ -310,24 +314,21 @@ void AravisCamera::ThrowIfLost() const {
   throw CameraError(Describe("device lost: " + lost_reason_));
 }
 
-// Hardware triggers are announced, not sent: the frame-set a pulse starts.
-// An image is matched by its timestamp against the frame-set's trigger time
-// when that is a recent time of this host's clock (not against when this
-// camera's trigger left, up to half a period later): a camera triggered late
-// then answers the set that a view of the whole rig puts it in, the nearest
-// in time (the rig-sim places its images so).
+// A software trigger's window opens as it leaves and closes the camera's
+// latency after the camera acknowledged it (exposure_matcher.h). Hardware
+// triggers are not sent from here: their frames go out with trigger_seq -1
+// and their exposure stamps, and the carving service groups them by time.
 void AravisCamera::Trigger(int64_t seq, int64_t utime) {
-  if (!IsOpen() || lost_ || mode_ == TriggerMode::kFreeRun) return;
-  {
-    const int64_t now = HostUtime();
-    const bool recent = utime <= now && now - utime < kRecentTriggerUs;
-    std::lock_guard lock(mutex_);
-    matcher_.Sent(PendingTrigger{seq, utime, recent ? utime : now});
-  }
-  if (mode_ != TriggerMode::kSoftware) return;
+  if (!IsOpen() || lost_ || mode_ != TriggerMode::kSoftware) return;
+  const int64_t sent = HostUtime();
   GError* error = nullptr;
   arv_camera_software_trigger(camera_, &error);
+  const int64_t acked = HostUtime();
   if (error != nullptr) MarkLost("the software trigger failed: " + TakeMessage(error));
+  std::lock_guard lock(mutex_);
+  // A trigger the camera did not acknowledge may still have reached it: its
+  // window stays, so that its frame is not taken for another trigger's.
+  matcher_.Sent(SentTrigger{seq, utime, sent, acked});
 }
 
 bool AravisCamera::Grab(std::chrono::milliseconds timeout, CameraFrame* frame) {
@@ -348,11 +349,12 @@ bool AravisCamera::Grab(std::chrono::milliseconds timeout, CameraFrame* frame) {
 }
 
 void AravisCamera::OnTimeout() {
+  const int64_t now = HostUtime();
   {
     std::lock_guard lock(mutex_);
     ++stats_.timeouts;
+    matcher_.Expire(now);
   }
-  const int64_t now = HostUtime();
   if (now - last_alive_utime_ < kProbeIntervalUs) return;
   last_alive_utime_ = now;
   guint32 value = 0;
@@ -368,14 +370,18 @@ void AravisCamera::OnTimeout() {
 // a complete one into `frame`, and gives the buffer back to the stream.
 bool AravisCamera::TakeBuffer(ArvBuffer* buffer, CameraFrame* frame) {
   const int64_t received_ns = static_cast<int64_t>(arv_buffer_get_system_timestamp(buffer));
-  const FrameTiming timing{static_cast<int64_t>(arv_buffer_get_frame_id(buffer)),
-                           static_cast<int64_t>(arv_buffer_get_timestamp(buffer)),
-                           received_ns != 0 ? received_ns / 1000 : HostUtime()};
+  const int64_t device_ns = static_cast<int64_t>(arv_buffer_get_timestamp(buffer));
+  const ExposureStamp timing{static_cast<int64_t>(arv_buffer_get_frame_id(buffer)),
+                             device_ns / 1000,
+                             received_ns != 0 ? received_ns / 1000 : HostUtime()};
+  const bool complete = arv_buffer_get_status(buffer) == ARV_BUFFER_STATUS_SUCCESS;
   std::unique_lock lock(mutex_);
-  const std::optional<PendingTrigger> trigger =
-      mode_ == TriggerMode::kFreeRun ? std::nullopt : matcher_.Match(timing);
+  matcher_.Expire(timing.received_utime);
+  // An incomplete buffer's stamps may be garbage: it answers nothing.
+  const std::optional<SentTrigger> trigger =
+      mode_ == TriggerMode::kSoftware && complete ? matcher_.Match(timing).trigger : std::nullopt;
   cv::Mat image;
-  if (arv_buffer_get_status(buffer) == ARV_BUFFER_STATUS_SUCCESS) {
+  if (complete) {
     size_t size = 0;
     const void* data = arv_buffer_get_image_data(buffer, &size);
     image =
@@ -385,7 +391,6 @@ bool AravisCamera::TakeBuffer(ArvBuffer* buffer, CameraFrame* frame) {
   const bool untriggered = mode_ == TriggerMode::kSoftware && !trigger;
   if (image.empty()) ++stats_.incomplete;
   if (!image.empty() && !untriggered) ++stats_.frames;
-  stats_.missed_triggers = matcher_.stale();
   lock.unlock();
   arv_stream_push_buffer(stream_, buffer);
   if (image.empty() || untriggered) return false;
@@ -393,7 +398,7 @@ bool AravisCamera::TakeBuffer(ArvBuffer* buffer, CameraFrame* frame) {
                        timing.frame_id,
                        trigger ? trigger->seq : -1,
                        trigger ? trigger->utime : 0,
-                       timing.device_ns,
+                       device_ns,
                        HostUtime(),
                        exposure_us_,
                        gain_db_};
@@ -402,7 +407,11 @@ bool AravisCamera::TakeBuffer(ArvBuffer* buffer, CameraFrame* frame) {
 
 CameraStats AravisCamera::Stats() const {
   std::lock_guard lock(mutex_);
-  return stats_;
+  CameraStats stats = stats_;
+  stats.missed_triggers = matcher_.unanswered();
+  stats.unmatched_frames = matcher_.rejected();
+  stats.unmatched_reasons = matcher_.DescribeRejections();
+  return stats;
 }
 
 }  // namespace

@@ -8,8 +8,9 @@
 // and starts a stream of buffer_count buffers. Grab() delivers only complete
 // buffers, converted to BGR (Bayer debayered, RGB8 swapped) or mono;
 // incomplete or corrupted ones are dropped and counted. Each frame carries
-// the frame-set of the software trigger it answers (see
-// aravis_trigger_matcher.h). A lost device (heartbeat lost, a failed
+// the frame-set of the software trigger it answers, proven by its exposure
+// timestamp (PTP time) against the trigger's window (exposure_matcher.h);
+// a frame nothing proves is dropped and counted with its reason. A lost device (heartbeat lost, a failed
 // trigger, or a device that stops answering while no frames come) makes
 // Grab() throw CameraError; Close() then Open() reconnects once it is back.
 // Every error names the camera and the device.

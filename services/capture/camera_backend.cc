@@ -87,6 +87,16 @@ std::string ValidateTrigger(const CameraConfig& config) {
   if (config.trigger == "hardware" && config.trigger_line.empty()) {
     return Expected("trigger_line", "a trigger input such as Line1", "''");
   }
+  // Only a clock shared with the host proves which trigger a frame answers.
+  if (config.timestamp_clock != "ptp") {
+    return Expected("timestamp_clock",
+                    "ptp (triggered frames are matched by exposure time on the host's clock; "
+                    "docs/capture.md)",
+                    Quoted(config.timestamp_clock));
+  }
+  if (!(config.trigger_latency_us >= 1.0 && config.trigger_latency_us <= 100'000.0)) {
+    return Expected("trigger_latency_us", "1-100000 µs", config.trigger_latency_us);
+  }
   return "";
 }
 

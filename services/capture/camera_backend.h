@@ -42,6 +42,11 @@ struct CameraConfig {
   double frame_rate = 30.0;            // Hz: free run, replay rate
   std::string trigger = "software";    // free_run | software | hardware
   std::string trigger_line = "Line1";  // hardware trigger source
+  // Where the camera's timestamps come from: "ptp" (IEEE 1588-synchronised
+  // with the host's clock, or the virtual rig's cameras, on the host's
+  // clock): triggered frames are matched to their trigger by exposure time.
+  std::string timestamp_clock = "ptp";
+  double trigger_latency_us = 4000.0;  // longest trigger -> exposure start
   int packet_size = 0;                 // GigE packet size, bytes (0: negotiate)
   int socket_buffer = 0;               // GigE socket buffer, bytes (0: Aravis default)
   int buffer_count = 8;                // stream / mmap buffers
@@ -61,6 +66,10 @@ struct CameraConfig {
     visit("frame_rate", frame_rate, "frame rate in free run and replay, Hz");
     visit("trigger", trigger, "free_run | software | hardware");
     visit("trigger_line", trigger_line, "hardware trigger input (e.g. Line1)");
+    visit("timestamp_clock", timestamp_clock,
+          "aravis: ptp (device timestamps on the host's clock; docs/capture.md)");
+    visit("trigger_latency_us", trigger_latency_us,
+          "aravis: longest time from a trigger's receipt to its exposure, µs (1-100000)");
     visit("packet_size", packet_size, "GigE packet size, bytes (0: negotiate)");
     visit("socket_buffer", socket_buffer, "GigE socket buffer, bytes (0: default)");
     visit("buffer_count", buffer_count, "stream buffers (2-64)");
@@ -87,9 +96,13 @@ struct CameraStats {
   int64_t incomplete = 0;  // incomplete or corrupted buffers dropped
   int64_t timeouts = 0;
   int64_t reconnects = 0;
-  // Software triggers dropped because the camera fell behind: frame-sets
-  // this camera will miss.
+  // Triggers that got no frame (the camera missed them, or their frame was
+  // lost or dropped): frame-sets this camera will miss.
   int64_t missed_triggers = 0;
+  // Frames dropped because nothing proves which trigger they answer, and why
+  // (e.g. "2 frames exposed outside every trigger's window").
+  int64_t unmatched_frames = 0;
+  std::string unmatched_reasons;
 };
 
 // Threads (as the capture service uses it): Open, Close and Grab come from

@@ -323,7 +323,8 @@ std::string DropBreakdown(const CameraSlot& slot, const CameraStats& stats) {
   return slot.config.name + ": " + std::to_string(stats.incomplete) + " incomplete images, " +
          std::to_string(stats.missed_triggers) + " triggers answered with no image, " +
          std::to_string(slot.missed_triggers + slot.relay.Dropped()) +
-         " triggers not sent (camera down, busy or too late)";
+         " triggers not sent (camera down, busy or too late)" +
+         (stats.unmatched_reasons.empty() ? "" : " (" + stats.unmatched_reasons + ")");
 }
 
 void CaptureService::UpdateStatus(bool last) {
@@ -361,12 +362,11 @@ CaptureSummary CaptureService::Summary() const {
 CaptureSummary CaptureService::Run(const std::atomic<bool>& stop) {
   world_ = MakeSimulatedWorld(options_, NowUtime());
   MakeSlots();
-  // Half a trigger period late a trigger is stale: the camera's exposure
-  // would lie nearer the next frame-set's trigger than its own, and a camera
-  // stamping its images (Aravis's backend tells the trigger an image answers
-  // by that stamp) could not be told from one answering the next trigger.
-  stale_trigger_us_ =
-      std::max<int64_t>(2'000, static_cast<int64_t>(0.5e6 / options_.trigger_rate_hz));
+  // A trigger that would leave a fifth of a period (at least 2 ms, at most
+  // half a period) after its frame-set's time is stale: the camera's image
+  // would show the scene that much later than its set's time says.
+  const double period_us = 1e6 / options_.trigger_rate_hz;
+  stale_trigger_us_ = static_cast<int64_t>(std::min(0.5 * period_us, std::max(2'000.0, 0.2 * period_us)));
   std::vector<std::thread> threads;
   bool any_software = false;
   for (const auto& slot : slots_) {

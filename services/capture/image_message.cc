@@ -40,6 +40,7 @@ image_t ToImageMessage(const std::string& camera, const CameraFrame& frame, int6
   message.gain_db = static_cast<float>(frame.gain_db);
   message.trigger_seq = frame.trigger_seq;
   message.trigger_utime = frame.trigger_utime > 0 ? frame.trigger_utime : frame.host_utime;
+  message.frame_id = frame.frame_id;
   message.device_timestamp_ns = frame.device_timestamp_ns;
   message.host_utime = frame.host_utime;
   message.stage_times = {CaptureStage(frame, message.trigger_utime)};

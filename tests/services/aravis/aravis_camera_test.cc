@@ -45,6 +45,19 @@ class AravisCameraTest : public ::testing::Test {
     return camera;
   }
 
+  // Opens the camera and spends one warm-up trigger: Aravis's fake camera
+  // serves the first trigger after its acquisition started up to 100 ms
+  // late (later polls come every millisecond), and that frame, stamped far
+  // outside its trigger's window, is dropped (a real camera exposes within
+  // microseconds). Every test's frames are therefore the fake's second on.
+  static void OpenAndSettle(CameraBackend& camera) {
+    camera.Open();
+    camera.Trigger(-1, 0);
+    CameraFrame warm_up;
+    camera.Grab(milliseconds(300), &warm_up);
+  }
+  static constexpr int64_t kWarmUpFills = 1;
+
   // Triggers seq and waits for its frame.
   static std::optional<CameraFrame> TriggerAndGrab(CameraBackend& camera, int64_t seq,
                                                    milliseconds timeout = milliseconds(3000)) {
@@ -77,11 +90,12 @@ TEST_F(AravisCameraTest, EveryPixelFormatDecodesToWhatTheCameraSent) {
   for (const std::string format :
        {"RGB8", "Mono8", "BayerRG8", "BayerGR8", "BayerGB8", "BayerBG8"}) {
     const auto camera = MakeAravisCamera(Config(LoopbackAddress(1), format));
-    ASSERT_NO_THROW(camera->Open()) << format;
+    ASSERT_NO_THROW(OpenAndSettle(*camera)) << format;
     const std::optional<CameraFrame> frame = TriggerAndGrab(*camera, 0);
     ASSERT_TRUE(frame.has_value()) << format;
     const uint32_t code = AravisPixelFormatCode(format);
     const size_t bytes = 64 * 48 * (format == "RGB8" ? 3 : 1);
+    frames_before += kWarmUpFills;
     const std::vector<uint8_t> sent = nettest::PatternBytes(frames_before, bytes);
     const cv::Mat expected = DecodeAravisImage(code, sent.data(), sent.size(), 64, 48);
     ASSERT_EQ(frame->image.type(), expected.type()) << format;
@@ -99,7 +113,7 @@ TEST_F(AravisCameraTest, AppliesSizeExposureAndTriggerSettings) {
   config.height = 200;
   config.exposure_us = 2500.0;
   const auto camera = MakeAravisCamera(config);
-  ASSERT_NO_THROW(camera->Open());
+  ASSERT_NO_THROW(OpenAndSettle(*camera));
   EXPECT_EQ(fake->Register(ARV_FAKE_CAMERA_REGISTER_WIDTH), 320u);
   EXPECT_EQ(fake->Register(ARV_FAKE_CAMERA_REGISTER_HEIGHT), 200u);
   EXPECT_EQ(fake->Register(ARV_FAKE_CAMERA_REGISTER_EXPOSURE_TIME_US), 2500u);
@@ -116,19 +130,20 @@ TEST_F(AravisCameraTest, AppliesSizeExposureAndTriggerSettings) {
 TEST_F(AravisCameraTest, SoftwareTriggerGivesExactlyOneFramePerTrigger) {
   const auto fake = Serve(0, "TRG0");
   const auto camera = MakeAravisCamera(Config(LoopbackAddress(1)));
-  ASSERT_NO_THROW(camera->Open());
+  ASSERT_NO_THROW(OpenAndSettle(*camera));
   for (int64_t seq = 0; seq < 20; ++seq) {
     const std::optional<CameraFrame> frame = TriggerAndGrab(*camera, seq);
-    ASSERT_TRUE(frame.has_value()) << "no frame for trigger " << seq;
+    ASSERT_TRUE(frame.has_value())
+        << "no frame for trigger " << seq << ": " << camera->Stats().unmatched_reasons;
     EXPECT_EQ(frame->trigger_seq, seq);
     EXPECT_EQ(frame->trigger_utime, 1'000'000 + seq);
-    EXPECT_EQ(nettest::FrameNumberOf(nettest::RawBytesOf(frame->image)), seq);
+    EXPECT_EQ(nettest::FrameNumberOf(nettest::RawBytesOf(frame->image)), seq + kWarmUpFills);
     EXPECT_GT(frame->device_timestamp_ns, 0);
     EXPECT_GE(frame->host_utime, sent_utime_.back());
   }
   CameraFrame extra;
   EXPECT_FALSE(camera->Grab(milliseconds(300), &extra)) << "a frame nobody triggered";
-  EXPECT_EQ(fake->FillTimes().size(), 20u);
+  EXPECT_EQ(fake->FillTimes().size(), 20u + kWarmUpFills);
   EXPECT_EQ(camera->Stats().frames, 20);
   EXPECT_EQ(camera->Stats().incomplete, 0);
 }
@@ -138,8 +153,8 @@ TEST_F(AravisCameraTest, SoftwareTriggerGivesExactlyOneFramePerTrigger) {
 TEST_F(AravisCameraTest, FramesOfATriggerStreamCarryTheirOwnTriggers) {
   const auto fake = Serve(0, "STR0");
   const auto camera = MakeAravisCamera(Config(LoopbackAddress(1)));
-  ASSERT_NO_THROW(camera->Open());
-  ASSERT_TRUE(TriggerAndGrab(*camera, 0).has_value());  // the fake serves its first trigger late
+  ASSERT_NO_THROW(OpenAndSettle(*camera));
+  ASSERT_TRUE(TriggerAndGrab(*camera, 0).has_value());
   std::vector<CameraFrame> frames;
   std::thread grabber([&] {
     CameraFrame frame;
@@ -171,7 +186,7 @@ TEST_F(AravisCameraTest, PacketLossDropsIncompleteFramesAndNeverDeliversABrokenO
   // 21 packets a frame (leader, 19 of data, trailer): 0.95^21, 34% arrive whole.
   config.packet_size = 16384;
   const auto camera = MakeAravisCamera(config);
-  ASSERT_NO_THROW(camera->Open());
+  ASSERT_NO_THROW(OpenAndSettle(*camera));
   int delivered = 0;
   for (int64_t seq = 0; seq < 40; ++seq) {
     // A broken frame is reported after Aravis's frame retention (100 ms).
@@ -182,13 +197,14 @@ TEST_F(AravisCameraTest, PacketLossDropsIncompleteFramesAndNeverDeliversABrokenO
     const int64_t n = nettest::FrameNumberOf(raw);
     ASSERT_EQ(raw, nettest::PatternBytes(n, raw.size()))
         << "corrupted image delivered, frame " << n;
-    EXPECT_EQ(frame->trigger_seq, n) << "one trigger, one image: frame n answers trigger n";
+    EXPECT_EQ(frame->trigger_seq, n - kWarmUpFills)
+        << "one trigger, one image: frame n answers trigger n";
   }
   const CameraStats stats = camera->Stats();
   EXPECT_EQ(stats.frames, delivered);
   EXPECT_GT(stats.incomplete, 5) << "5% packet loss breaks about 66% of 21-packet frames";
   EXPECT_GT(delivered, 3) << "about 34% of 21-packet frames get through 5% loss";
-  EXPECT_LE(stats.frames + stats.incomplete, 40);
+  EXPECT_LE(stats.frames + stats.incomplete, 40 + kWarmUpFills);
 }
 
 // The camera disappears: Grab() throws naming camera and device; Open()
@@ -197,7 +213,7 @@ TEST_F(AravisCameraTest, ALostCameraRaisesAndReconnectsWhenItReturns) {
   auto fake = Serve(0, "GONE0");
   const CameraConfig config = Config(LoopbackAddress(1));
   const auto camera = MakeAravisCamera(config);
-  ASSERT_NO_THROW(camera->Open());
+  ASSERT_NO_THROW(OpenAndSettle(*camera));
   ASSERT_TRUE(TriggerAndGrab(*camera, 0).has_value());
   fake.reset();
   std::string error;
@@ -216,7 +232,7 @@ TEST_F(AravisCameraTest, ALostCameraRaisesAndReconnectsWhenItReturns) {
   EXPECT_THROW(camera->Open(), CameraError) << "nothing to open";
   EXPECT_FALSE(camera->IsOpen());
   fake = Serve(0, "GONE0");
-  ASSERT_NO_THROW(camera->Open());
+  ASSERT_NO_THROW(OpenAndSettle(*camera));
   const std::optional<CameraFrame> frame = TriggerAndGrab(*camera, 100);
   ASSERT_TRUE(frame.has_value());
   EXPECT_EQ(frame->trigger_seq, 100);
@@ -228,7 +244,7 @@ TEST_F(AravisCameraTest, OpensBySerialNumberAndByDeviceId) {
   for (const std::string& device :
        std::vector<std::string>{"SER7", "Aravis-Fake-SER7", LoopbackAddress(3)}) {
     const auto camera = MakeAravisCamera(Config(device));
-    ASSERT_NO_THROW(camera->Open()) << device;
+    ASSERT_NO_THROW(OpenAndSettle(*camera)) << device;
     EXPECT_TRUE(TriggerAndGrab(*camera, 0).has_value()) << device;
   }
 }
@@ -263,7 +279,7 @@ TEST_F(AravisCameraTest, HardwareTriggerWaitsForTheLine) {
   config.trigger = "hardware";
   config.trigger_line = "Line0";
   const auto camera = MakeAravisCamera(config);
-  ASSERT_NO_THROW(camera->Open());
+  ASSERT_NO_THROW(OpenAndSettle(*camera));
   EXPECT_EQ(fake->Register(ARV_FAKE_CAMERA_REGISTER_TRIGGER_MODE), 1u);
   EXPECT_EQ(fake->Register(ARV_FAKE_CAMERA_REGISTER_TRIGGER_SOURCE), 0u) << "Line0";
   camera->Trigger(0, 0);  // announced only: nothing is sent
@@ -278,7 +294,7 @@ TEST_F(AravisCameraTest, FreeRunStreamsAtTheFrameRateWithoutTriggers) {
   config.trigger = "free_run";
   config.frame_rate = 50.0;
   const auto camera = MakeAravisCamera(config);
-  ASSERT_NO_THROW(camera->Open());
+  ASSERT_NO_THROW(OpenAndSettle(*camera));
   EXPECT_EQ(fake->Register(ARV_FAKE_CAMERA_REGISTER_TRIGGER_MODE), 0u);
   EXPECT_EQ(fake->Register(ARV_FAKE_CAMERA_REGISTER_ACQUISITION_FRAME_PERIOD_US), 20'000u);
   for (int i = 0; i < 5; ++i) {

@@ -20,6 +20,7 @@ CameraFrame Frame(const cv::Mat& image) {
   frame.trigger_utime = 1'000'000;
   frame.host_utime = 1'004'500;
   frame.device_timestamp_ns = 77;
+  frame.frame_id = 4242;
   frame.exposure_us = 900;
   frame.gain_db = 3;
   return frame;
@@ -54,6 +55,7 @@ TEST(ImageMessageTest, CarriesTheFrameSetAndItsCaptureStage) {
   EXPECT_EQ(message.trigger_utime, 1'000'000);
   EXPECT_EQ(message.host_utime, 1'004'500);
   EXPECT_EQ(message.device_timestamp_ns, 77);
+  EXPECT_EQ(message.frame_id, 4242);
   EXPECT_EQ(message.exposure_us, 900.0f);
   EXPECT_EQ(message.gain_db, 3.0f);
   ASSERT_EQ(message.num_stage_times, 1);

@@ -1,0 +1,143 @@
+#include "services/capture/exposure_matcher.h"
+
+namespace shapesense {
+namespace {
+
+// GigE Vision 1.x block ids are 16-bit, skip 0 and wrap: 65535 is followed by 1.
+constexpr int64_t kLastShortId = 0xffff;
+constexpr int64_t kWrapMargin = 0x100;
+
+bool Wrapped(int64_t last, int64_t id) {
+  return last <= kLastShortId && last > kLastShortId - kWrapMargin && id < kWrapMargin;
+}
+
+}  // namespace
+
+const char* MatchVerdictName(MatchVerdict verdict) {
+  switch (verdict) {
+    case MatchVerdict::kMatched:
+      return "matched";
+    case MatchVerdict::kNoTimestamp:
+      return "without exposure timestamp";
+    case MatchVerdict::kFutureTimestamp:
+      return "stamped after they arrived";
+    case MatchVerdict::kRepeatedFrameId:
+      return "repeating the last frame id";
+    case MatchVerdict::kFrameIdBackwards:
+      return "with a frame id going backwards";
+    case MatchVerdict::kOutsideWindows:
+      return "exposed outside every trigger's window";
+    case MatchVerdict::kAmbiguous:
+      return "inside two triggers' windows";
+    case MatchVerdict::kAnsweredAlready:
+      return "for a trigger answered already";
+    case MatchVerdict::kCount:
+      break;
+  }
+  return "?";
+}
+
+void ExposureMatcher::Sent(const SentTrigger& trigger) {
+  Expire(trigger.sent_utime);
+  windows_.push_back({trigger, false});
+  // Bounds memory whatever the rate: the oldest window goes first.
+  while (windows_.size() > options_.capacity) {
+    if (!windows_.front().answered) ++unanswered_;
+    windows_.pop_front();
+  }
+}
+
+MatchVerdict ExposureMatcher::CheckFrameId(int64_t frame_id) const {
+  if (frame_id == 0 || last_frame_id_ == 0) return MatchVerdict::kMatched;
+  if (frame_id == last_frame_id_) return MatchVerdict::kRepeatedFrameId;
+  if (frame_id < last_frame_id_ && !Wrapped(last_frame_id_, frame_id)) {
+    return MatchVerdict::kFrameIdBackwards;
+  }
+  return MatchVerdict::kMatched;
+}
+
+MatchResult ExposureMatcher::Count(MatchVerdict verdict, std::optional<SentTrigger> trigger) {
+  ++counts_[static_cast<size_t>(verdict)];
+  return {verdict, trigger};
+}
+
+MatchResult ExposureMatcher::Match(const ExposureStamp& frame) {
+  if (frame.exposure_utime <= 0) return Count(MatchVerdict::kNoTimestamp);
+  if (frame.exposure_utime > frame.received_utime + options_.clock_tolerance_us) {
+    return Count(MatchVerdict::kFutureTimestamp);
+  }
+  if (const MatchVerdict id = CheckFrameId(frame.frame_id); id != MatchVerdict::kMatched) {
+    return Count(id);
+  }
+  if (frame.frame_id != 0) last_frame_id_ = frame.frame_id;
+  bool answered_holds = false;
+  const std::optional<size_t> holder = HolderOf(frame.exposure_utime, &answered_holds);
+  if (holder && *holder == kAmbiguous) return Count(MatchVerdict::kAmbiguous);
+  if (!holder) {
+    return Count(answered_holds ? MatchVerdict::kAnsweredAlready : MatchVerdict::kOutsideWindows);
+  }
+  Window& window = windows_[*holder];
+  window.answered = true;
+  return Count(MatchVerdict::kMatched, window.trigger);
+}
+
+// A window already answered cannot hold this frame: a triggered camera
+// exposes once per trigger (burst of one), and the frame that answered it
+// came earlier.
+std::optional<size_t> ExposureMatcher::HolderOf(int64_t exposure_utime,
+                                                bool* answered_holds) const {
+  std::optional<size_t> holder;
+  for (size_t i = 0; i < windows_.size(); ++i) {
+    const SentTrigger& t = windows_[i].trigger;
+    if (exposure_utime < t.sent_utime || exposure_utime > t.acked_utime + options_.max_latency_us) {
+      continue;
+    }
+    if (windows_[i].answered) {
+      *answered_holds = true;
+      continue;
+    }
+    if (holder) return kAmbiguous;
+    holder = i;
+  }
+  return holder;
+}
+
+void ExposureMatcher::Expire(int64_t now_utime) {
+  while (!windows_.empty()) {
+    const Window& oldest = windows_.front();
+    const int64_t closes =
+        oldest.trigger.acked_utime + options_.max_latency_us + options_.keep_us;
+    if (closes > now_utime) return;
+    if (!oldest.answered) ++unanswered_;
+    windows_.pop_front();
+  }
+}
+
+void ExposureMatcher::Reset() {
+  for (const Window& window : windows_) {
+    if (!window.answered) ++unanswered_;
+  }
+  windows_.clear();
+  last_frame_id_ = 0;
+}
+
+int64_t ExposureMatcher::rejected() const {
+  int64_t total = 0;
+  for (size_t i = 0; i < counts_.size(); ++i) {
+    if (static_cast<MatchVerdict>(i) != MatchVerdict::kMatched) total += counts_[i];
+  }
+  return total;
+}
+
+std::string ExposureMatcher::DescribeRejections() const {
+  std::string text;
+  for (size_t i = 0; i < counts_.size(); ++i) {
+    const auto verdict = static_cast<MatchVerdict>(i);
+    if (verdict == MatchVerdict::kMatched || counts_[i] == 0) continue;
+    text += (text.empty() ? "" : ", ") + std::to_string(counts_[i]) + " frames " +
+            MatchVerdictName(verdict);
+  }
+  return text;
+}
+
+}  // namespace shapesense
