@@ -1,6 +1,7 @@
 #include "runtime/lcm/frame_set_assembler.h"
 
 #include <algorithm>
+#include <climits>
 #include <cmath>
 #include <set>
 #include <stdexcept>
@@ -30,6 +31,10 @@ std::string FrameSetAssemblyOptions::Validate() const {
   if (max_pending < 1 || max_pending > 1000) {
     return "max_pending: expected 1-1000, got " + std::to_string(max_pending);
   }
+  if (!(max_exposure_spread_ms >= 0.01 && max_exposure_spread_ms <= 1000)) {
+    return "max_exposure_spread_ms: expected 0.01-1000, got " +
+           std::to_string(max_exposure_spread_ms);
+  }
   return {};
 }
 
@@ -41,6 +46,10 @@ const char* AssemblyOutcomeName(AssemblyOutcome outcome) {
       return "completed";
     case AssemblyOutcome::kDuplicate:
       return "duplicate image";
+    case AssemblyOutcome::kConflicting:
+      return "conflicting images";
+    case AssemblyOutcome::kSpread:
+      return "exposures too far apart";
     case AssemblyOutcome::kUnknownCamera:
       return "unknown camera";
     case AssemblyOutcome::kLate:
@@ -54,7 +63,8 @@ FrameSetAssembler::FrameSetAssembler(std::vector<std::string> cameras,
     : cameras_(std::move(cameras)),
       options_(options),
       tolerance_us_(Microseconds(options.time_tolerance_ms)),
-      timeout_us_(Microseconds(options.timeout_ms)) {
+      timeout_us_(Microseconds(options.timeout_ms)),
+      max_spread_us_(Microseconds(options.max_exposure_spread_ms)) {
   if (const std::string error = options.Validate(); !error.empty()) {
     throw std::invalid_argument("frame-set assembly: " + error);
   }
@@ -106,6 +116,7 @@ FrameSetAssembler::Pending& FrameSetAssembler::StartSet(const image_t& image, in
   }
   Pending& pending = pending_.emplace_back();
   pending.reference_utime = image_time;
+  pending.given_trigger_utime = image.trigger_utime;
   pending.set.trigger_seq = image.trigger_seq >= 0 ? image.trigger_seq : -1;
   pending.set.trigger_utime = image_time;
   pending.set.images.resize(cameras_.size());
@@ -150,6 +161,36 @@ int FrameSetAssembler::Expire(int64_t now_utime) {
   return expired;
 }
 
+bool FrameSetAssembler::Conflicts(const Pending& pending, const image_t& image,
+                                  size_t slot) const {
+  if (pending.set.trigger_seq < 0) return false;  // matched by time: nothing to contradict
+  const image_t& held = pending.set.images[slot];
+  if (!held.camera.empty() && (held.frame_id != image.frame_id ||
+                               held.device_timestamp_ns != image.device_timestamp_ns)) {
+    return true;
+  }
+  return pending.received > 0 && image.trigger_utime != pending.given_trigger_utime;
+}
+
+int64_t FrameSetAssembler::ExposureSpread(const FrameSet& set) {
+  int64_t earliest = INT64_MAX, latest = INT64_MIN;
+  for (const image_t& image : set.images) {
+    if (image.device_timestamp_ns <= 0) return 0;
+    earliest = std::min(earliest, image.device_timestamp_ns);
+    latest = std::max(latest, image.device_timestamp_ns);
+  }
+  return (latest - earliest) / 1000;
+}
+
+AssemblyResult FrameSetAssembler::DropConflicting(Pending* pending) {
+  Drop(*pending, "its images disagree on their trigger");
+  const auto it = std::find_if(pending_.begin(), pending_.end(),
+                               [&](const Pending& p) { return &p == pending; });
+  pending_.erase(it);
+  ++counters_.conflicting;
+  return {AssemblyOutcome::kConflicting, std::nullopt};
+}
+
 AssemblyResult FrameSetAssembler::Add(image_t image, int64_t now_utime) {
   Expire(now_utime);
   const int camera = CameraIndex(image.camera);
@@ -165,6 +206,7 @@ AssemblyResult FrameSetAssembler::Add(image_t image, int64_t now_utime) {
   }
   if (pending == nullptr) pending = &StartSet(image, image_time, now_utime);
   const size_t slot = static_cast<size_t>(camera);
+  if (Conflicts(*pending, image, slot)) return DropConflicting(pending);
   if (!pending->set.images[slot].camera.empty()) {
     ++counters_.duplicates;
     return {AssemblyOutcome::kDuplicate, std::nullopt};
@@ -179,6 +221,13 @@ AssemblyResult FrameSetAssembler::Add(image_t image, int64_t now_utime) {
   Retire(*pending);
   const auto it = std::find_if(pending_.begin(), pending_.end(),
                                [&](const Pending& p) { return &p == pending; });
+  if (it->set.trigger_seq >= 0 && ExposureSpread(it->set) > max_spread_us_) {
+    last_drop_ = "frame-set " + std::to_string(it->set.trigger_seq) + " dropped: its exposures lie " +
+                 std::to_string(ExposureSpread(it->set)) + " us apart";
+    pending_.erase(it);
+    ++counters_.spread;
+    return {AssemblyOutcome::kSpread, std::nullopt};
+  }
   AssemblyResult result{AssemblyOutcome::kCompleted, std::move(it->set)};
   pending_.erase(it);
   ++counters_.completed;

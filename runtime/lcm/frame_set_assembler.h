@@ -24,6 +24,10 @@ struct FrameSetAssemblyOptions {
   // Sets waiting for images at once; beyond it the oldest is dropped and
   // counted (bounds memory when a camera is lost).
   int max_pending = 8;
+  // Triggered cameras stamping their exposures on one clock (PTP): a set
+  // whose exposures lie further apart than this is dropped and counted (its
+  // views would not show one shape), ms.
+  double max_exposure_spread_ms = 5.0;
 
   template <class Visitor>
   void VisitFields(Visitor&& visit) {
@@ -31,6 +35,8 @@ struct FrameSetAssemblyOptions {
           "free-running cameras: largest spread of one set's image times, ms (0-1000)");
     visit("timeout_ms", timeout_ms, "incomplete set dropped after this, ms (1-60000)");
     visit("max_pending", max_pending, "incomplete sets kept at once (1-1000)");
+    visit("max_exposure_spread_ms", max_exposure_spread_ms,
+          "triggered sets: largest spread of their exposure timestamps, ms (0.01-1000)");
   }
   std::string Validate() const;
 };
@@ -59,7 +65,10 @@ inline FrameSetKey KeyOf(const FrameSet& set) { return {set.trigger_seq, set.tri
 enum class AssemblyOutcome {
   kPending,        // joined or started a set that still misses images
   kCompleted,      // completed a set
-  kDuplicate,      // its camera already has an image in that set: ignored
+  kDuplicate,      // its camera already has this very image (same frame id) in that set: ignored
+  kConflicting,    // its camera already has another image in the set, or the image gives
+                   // the set another trigger time: the set is dropped, never measured
+  kSpread,         // completed a set whose exposures lie too far apart: dropped
   kUnknownCamera,  // not a camera of the rig: ignored
   kLate,           // its set was completed or dropped already: ignored
 };
@@ -74,17 +83,22 @@ struct AssemblyCounters {
   int64_t completed = 0;
   int64_t timed_out = 0;  // incomplete sets dropped after the timeout
   int64_t evicted = 0;    // incomplete sets dropped to stay within max_pending
+  int64_t conflicting = 0;  // sets dropped because their images disagree on their trigger
+  int64_t spread = 0;       // sets dropped because their exposures lie too far apart
   int64_t duplicates = 0;
   int64_t unknown_camera = 0;
   int64_t late = 0;
-  int64_t DroppedSets() const { return timed_out + evicted; }
+  int64_t DroppedSets() const { return timed_out + evicted + conflicting + spread; }
   int64_t RejectedImages() const { return duplicates + unknown_camera + late; }
 };
 
 // Images with trigger_seq >= 0 form a set when every camera has one with the
 // same sequence; images with trigger_seq < 0 (free-running cameras) when
 // every camera has one within the time tolerance. Images may arrive in any
-// order, also across sets. Holds at most max_pending sets.
+// order, also across sets. A set whose images disagree (two different
+// images from one camera, or two trigger times for one sequence) is
+// dropped and counted: nothing proves which belongs. Holds at most
+// max_pending sets.
 class FrameSetAssembler {
  public:
   // `cameras`: the rig's camera names, in rig order. Throws
@@ -107,6 +121,7 @@ class FrameSetAssembler {
   struct Pending {
     FrameSet set;
     int64_t reference_utime = 0;  // the first image's time: free-running images match it
+    int64_t given_trigger_utime = 0;  // the first image's trigger_utime, as it came
     int received = 0;
   };
 
@@ -117,11 +132,18 @@ class FrameSetAssembler {
   Pending& StartSet(const image_t& image, int64_t image_time, int64_t now_utime);
   void Retire(const Pending& pending);
   void Drop(const Pending& pending, const char* why);
+  // Whether `image` contradicts what `pending` holds (see kConflicting).
+  bool Conflicts(const Pending& pending, const image_t& image, size_t slot) const;
+  AssemblyResult DropConflicting(Pending* pending);
+  // The spread of a complete triggered set's exposure stamps, µs; 0 when
+  // some image has none.
+  static int64_t ExposureSpread(const FrameSet& set);
 
   std::vector<std::string> cameras_;
   FrameSetAssemblyOptions options_;
   int64_t tolerance_us_;
   int64_t timeout_us_;
+  int64_t max_spread_us_;
   std::deque<Pending> pending_;      // oldest first
   std::deque<FrameSetKey> retired_;  // recently completed or dropped, to recognise late images
   AssemblyCounters counters_;

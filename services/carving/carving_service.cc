@@ -45,16 +45,25 @@ CarvingService::CarvingService(const CarvingServiceOptions& options, RigSetup se
         CarveAndPublish(set);
       }) {
   bus_.Subscribe<image_t>(channels::kImagePattern,
-                          [this](image_t&& image, const std::string&, int64_t receive_utime) {
-                            OnImage(std::move(image), receive_utime);
+                          [this](image_t&& image, const std::string& channel,
+                                 int64_t receive_utime) {
+                            OnImage(std::move(image), channel, receive_utime);
                           });
 }
 
-void CarvingService::OnImage(image_t&& image, int64_t receive_utime) {
+void CarvingService::OnImage(image_t&& image, const std::string& channel,
+                             int64_t receive_utime) {
   status_.Received();
   if (const std::string error = ValidateImageMessage(image); !error.empty()) {
     status_.Rejected();
     status_.Note(error);
+    return;
+  }
+  // A camera speaks for itself only: an image naming another camera than
+  // its channel's could join that camera's frame-sets.
+  if (channel != channels::Image(image.camera)) {
+    status_.Rejected();
+    status_.Note(channel + ": image names camera '" + image.camera + "'");
     return;
   }
   // Kept for the note on a rejection (the image moves into the assembler).
@@ -65,7 +74,8 @@ void CarvingService::OnImage(image_t&& image, int64_t receive_utime) {
   CountAssemblyDrops(dropped_before);
   if (result.outcome == AssemblyOutcome::kCompleted) {
     worker_.Push(std::move(*result.completed));
-  } else if (result.outcome != AssemblyOutcome::kPending) {
+  } else if (result.outcome != AssemblyOutcome::kPending &&
+             result.outcome != AssemblyOutcome::kSpread) {  // a dropped set, counted as one
     status_.Rejected();
     status_.Note(camera + ": " + AssemblyOutcomeName(result.outcome) + " (trigger " +
                  std::to_string(trigger_seq) + ")");

@@ -81,7 +81,7 @@ class CarvingService {
   const AssemblyCounters& assembly() const { return assembler_.counters(); }
 
  private:
-  void OnImage(image_t&& image, int64_t receive_utime);
+  void OnImage(image_t&& image, const std::string& channel, int64_t receive_utime);
   void CountAssemblyDrops(int64_t before);
   void CarveAndPublish(const FrameSet& set);
   void MaybePublishSilhouettes(const FrameSet& set);

@@ -129,7 +129,8 @@ void ShapeService::OnImage(image_t&& image, int64_t receive_utime) {
   CountAssemblyDrops(dropped_before);
   if (result.outcome == AssemblyOutcome::kCompleted) {
     OnFrameSet(std::move(*result.completed));
-  } else if (result.outcome != AssemblyOutcome::kPending) {
+  } else if (result.outcome != AssemblyOutcome::kPending &&
+             result.outcome != AssemblyOutcome::kSpread) {  // a dropped set, counted as one
     status_.Rejected();
     status_.Note(camera + ": " + AssemblyOutcomeName(result.outcome));
   }

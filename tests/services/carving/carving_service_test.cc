@@ -187,8 +187,10 @@ TEST_F(CarvingServiceTest, FrameSetsThatCannotBeCarvedAreCountedAsErrors) {
   broken[1].size = 64;
   Publish(broken);
   std::vector<image_t> wrong_size = rig_->Messages(2, 3, NowUtime());
+  const int64_t set_time = wrong_size[2].trigger_utime;
   wrong_size[2] = testing::MakeImageMessage(cv::Mat(100, 120, CV_8UC3, cv::Scalar(1, 2, 3)), "cam2",
                                             3, NowUtime());
+  wrong_size[2].trigger_utime = set_time;
   Publish(wrong_size);
   Publish(rig_->Messages(3, 4, NowUtime()));
   ASSERT_TRUE(HandleUntilClouds(service, 1));

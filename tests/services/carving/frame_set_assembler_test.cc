@@ -31,15 +31,38 @@ FrameSetAssemblyOptions Options(double timeout_ms = 100, int max_pending = 4) {
   return options;
 }
 
+// Images that disagree on their trigger (another trigger time for the same
+// sequence, or a second, different image of one camera) drop their set:
+// nothing proves which image belongs. The same image again is a duplicate.
+TEST(FrameSetAssemblerTest, ImagesThatDisagreeOnTheirTriggerDropTheSet) {
+  FrameSetAssembler assembler(kCameras, Options());
+  ASSERT_EQ(assembler.Add(Image("cam0", 5), 10).outcome, AssemblyOutcome::kPending);
+  EXPECT_EQ(assembler.Add(Image("cam1", 5, 1'000'001), 20).outcome,
+            AssemblyOutcome::kConflicting);
+  EXPECT_EQ(assembler.pending(), 0u);
+  EXPECT_EQ(assembler.Add(Image("cam2", 5), 30).outcome, AssemblyOutcome::kLate);
+
+  image_t first = Image("cam0", 6);
+  first.frame_id = 40;
+  ASSERT_EQ(assembler.Add(first, 40).outcome, AssemblyOutcome::kPending);
+  EXPECT_EQ(assembler.Add(first, 41).outcome, AssemblyOutcome::kDuplicate);
+  image_t other = first;
+  other.frame_id = 41;
+  EXPECT_EQ(assembler.Add(other, 42).outcome, AssemblyOutcome::kConflicting);
+  EXPECT_EQ(assembler.counters().conflicting, 2);
+  EXPECT_EQ(assembler.counters().DroppedSets(), 2);
+  EXPECT_NE(assembler.last_drop().find("disagree"), std::string::npos) << assembler.last_drop();
+}
+
 TEST(FrameSetAssemblerTest, ASetCompletesWhenEveryCameraHasAnImageInRigOrder) {
   FrameSetAssembler assembler(kCameras, Options());
   EXPECT_EQ(assembler.Add(Image("cam2", 5), 10).outcome, AssemblyOutcome::kPending);
   EXPECT_EQ(assembler.Add(Image("cam0", 5), 20).outcome, AssemblyOutcome::kPending);
-  AssemblyResult result = assembler.Add(Image("cam1", 5, 999'000), 30);
+  AssemblyResult result = assembler.Add(Image("cam1", 5), 30);
   ASSERT_EQ(result.outcome, AssemblyOutcome::kCompleted);
   const FrameSet& set = *result.completed;
   EXPECT_EQ(set.trigger_seq, 5);
-  EXPECT_EQ(set.trigger_utime, 999'000);  // the earliest of its images
+  EXPECT_EQ(set.trigger_utime, 1'000'000);
   ASSERT_EQ(set.images.size(), 3u);
   for (size_t i = 0; i < 3; ++i) EXPECT_EQ(set.images[i].camera, kCameras[i]);
   EXPECT_EQ(set.receive_utime, (std::vector<int64_t>{20, 30, 10}));
