@@ -7,6 +7,7 @@
 #include <cstring>
 #include <future>
 #include <stdexcept>
+#include <thread>
 
 #include "services/capture/genicam_pixel_formats.h"
 #include "services/rig_sim/raw_image.h"
@@ -14,7 +15,9 @@
 namespace shapesense {
 namespace {
 
-constexpr size_t kKeptFrameSets = 1000;
+constexpr size_t kKeptExposures = 1000;
+// GigE Vision 1.x block ids are 16-bit and skip 0.
+constexpr int64_t kLastBlockId = 0xffff;
 constexpr size_t kSerialLimit = 15;  // GigE Vision serial numbers hold 16 bytes with the NUL
 // The fake camera looks for a software trigger at this rate once streaming:
 // the delay between a trigger and its image is up to one period. Its thread
@@ -33,8 +36,10 @@ int RenderThreads() {
 }
 constexpr int kRenderNiceness = 10;
 
-// How often the watcher looks for triggers.
-constexpr auto kWatchPeriod = std::chrono::milliseconds(1);
+// How often the watcher looks for triggers: the exposure of a camera starts
+// up to this late after its trigger arrived, so the cameras of one trigger
+// expose this much apart at most, beyond their triggers' own spread.
+constexpr auto kWatchPeriod = std::chrono::microseconds(250);
 
 int64_t HostUtime() { return g_get_real_time(); }
 
@@ -61,10 +66,16 @@ struct FakeCameraServer::Slot {
   bool acquiring = false;                   // the watcher's last look
   bool trigger_before_start = false;        // a trigger written while not acquiring
   // When the watcher saw a software trigger waiting (-1: none since the last
-  // image): the time the trigger reached the camera, which its image may
-  // follow by up to a trigger poll (or, for a session's first image, by up
-  // to the fake camera's 100 ms first poll).
-  std::atomic<int64_t> trigger_seen_utime{-1};
+  // image): the exposure's start. The fake camera's thread serves it at its
+  // next poll, or after the image it is busy with. `seen_fills` is `fills`
+  // when the watcher looked: a sighting the camera's thread overtook (it
+  // served the trigger between the watcher's look and its note) belongs to
+  // no later image.
+  std::mutex seen_mutex;
+  int64_t trigger_seen_utime = -1;
+  int64_t seen_fills = 0;
+  int64_t fills = 0;
+  int64_t exposures = 0;  // frames made; the block id is its 16-bit form
 };
 
 namespace {
@@ -74,15 +85,13 @@ void FillPattern(ArvBuffer* buffer, void* slot_data, guint32 /*exposure_us*/, gu
   // The buffer belongs to the fake camera; the fill callback is where it is written.
   void* data = const_cast<void*>(arv_buffer_get_data(buffer, nullptr));
   const auto* slot = static_cast<const FakeCameraServer::Slot*>(slot_data);
-  const int64_t waited_us =
+  const FakeCameraServer::Stamp stamp =
       slot->server->Fill(slot->camera, data, arv_buffer_get_image_width(buffer),
                          arv_buffer_get_image_height(buffer), pixel_format);
-  // The image's timestamp is its exposure, when the trigger arrived, as a real
-  // camera's: the client tells which trigger an image answers by it.
-  const auto stamped = static_cast<int64_t>(arv_buffer_get_timestamp(buffer));
-  if (waited_us > 0 && stamped > waited_us * 1000) {
-    arv_buffer_set_timestamp(buffer, static_cast<guint64>(stamped - waited_us * 1000));
-  }
+  // What a PTP-synchronised camera reports: its exposure on the rig's clock
+  // and its own count of exposures.
+  arv_buffer_set_timestamp(buffer, static_cast<guint64>(stamp.exposure_utime) * 1000);
+  arv_buffer_set_frame_id(buffer, static_cast<guint64>(stamp.frame_id));
 }
 
 std::string SerialOf(const Camera& camera, int index) {
@@ -99,7 +108,7 @@ FakeCameraServer::FakeCameraServer(Rig rig, TrajectoryOptions trajectory,
       trajectory_(std::move(trajectory)),
       seed_(seed),
       origin_utime_(origin_utime),
-      clock_(static_cast<int>(rig_.cameras.size())) {
+      history_(rig_.cameras.size()) {
   if (addresses.size() != rig_.cameras.size()) {
     throw std::invalid_argument("rig-sim: " + std::to_string(rig_.cameras.size()) +
                                 " cameras need as many addresses, got " +
@@ -150,35 +159,54 @@ bool TriggerWaiting(ArvFakeCamera* fake) {
 // first trigger of its own.
 void ForgetEarlierTriggers(FakeCameraServer::Slot& slot, ArvFakeCamera* fake) {
   arv_fake_camera_write_register(fake, ARV_FAKE_CAMERA_REGISTER_TRIGGER_SOFTWARE, 0);
+  std::lock_guard lock(slot.seen_mutex);
   slot.trigger_seen_utime = -1;
 }
 
 }  // namespace
 
-// Notes when a software trigger reaches each camera: its thread serves the
-// trigger at its next poll, or after the image it is busy with.
+// Notes when a software trigger reaches each camera: its exposure.
 void FakeCameraServer::WatchTriggers() {
   while (!stop_watching_) {
     {
       std::lock_guard lock(slots_mutex_);
-      for (const auto& slot : slots_) {
-        ArvFakeCamera* fake = slot->gv_camera != nullptr
-                                  ? arv_gv_fake_camera_get_fake_camera(slot->gv_camera)
-                                  : nullptr;
-        const bool acquiring = fake != nullptr && arv_fake_camera_get_acquisition_status(fake) != 0;
-        if (fake != nullptr && !acquiring) slot->trigger_before_start = TriggerWaiting(fake);
-        if (acquiring && !slot->acquiring && slot->trigger_before_start) {
-          ForgetEarlierTriggers(*slot, fake);
-        }
-        slot->acquiring = acquiring;
-        int64_t none = -1;
-        if (acquiring && TriggerWaiting(fake)) {
-          slot->trigger_seen_utime.compare_exchange_strong(none, HostUtime());
-        }
-      }
+      for (const auto& slot : slots_) WatchTrigger(*slot);
     }
     std::this_thread::sleep_for(kWatchPeriod);
   }
+}
+
+void FakeCameraServer::WatchTrigger(Slot& slot) {
+  ArvFakeCamera* fake =
+      slot.gv_camera != nullptr ? arv_gv_fake_camera_get_fake_camera(slot.gv_camera) : nullptr;
+  const bool acquiring = fake != nullptr && arv_fake_camera_get_acquisition_status(fake) != 0;
+  if (fake != nullptr && !acquiring) slot.trigger_before_start = TriggerWaiting(fake);
+  if (acquiring && !slot.acquiring && slot.trigger_before_start) {
+    ForgetEarlierTriggers(slot, fake);
+  }
+  slot.acquiring = acquiring;
+  if (!acquiring) return;
+  int64_t fills = 0;
+  {
+    std::lock_guard lock(slot.seen_mutex);
+    if (slot.trigger_seen_utime >= 0) return;  // the camera has yet to serve the last one
+    fills = slot.fills;
+  }
+  if (!TriggerWaiting(fake)) return;
+  bool missed = false;
+  {
+    std::lock_guard lock(mutex_);
+    missed = faults_.miss_ratio > 0.0 &&
+             std::bernoulli_distribution(faults_.miss_ratio)(fault_random_);
+  }
+  if (missed) {
+    ForgetEarlierTriggers(slot, fake);
+    return;
+  }
+  std::lock_guard lock(slot.seen_mutex);
+  if (slot.fills != fills || slot.trigger_seen_utime >= 0) return;
+  slot.trigger_seen_utime = HostUtime();
+  slot.seen_fills = fills;
 }
 
 // The fake camera starts with the rig camera's size and RGB8, and answers a
@@ -237,56 +265,64 @@ void FakeCameraServer::SetPacketLoss(double ratio) {
   }
 }
 
-FrameSet FakeCameraServer::Assign(int camera, int64_t trigger_utime) {
+void FakeCameraServer::SetFaults(const CameraFaults& faults) {
   std::lock_guard lock(mutex_);
-  const FrameSetClock::Slot slot = clock_.AssignByTrigger(camera, trigger_utime);
-  // A set joined is one of the clock's recent ones, all still in the history.
-  for (auto set = history_.rbegin(); !slot.opened && set != history_.rend(); ++set) {
-    if (set->seq == slot.seq) return *set;
-  }
-  FrameSet set;
-  set.seq = slot.seq;
-  set.trigger_utime = slot.first_utime;
-  set.t_seconds = static_cast<double>(slot.first_utime - origin_utime_) * 1e-6;
-  if (plant_ != nullptr) {
-    set.scene = std::make_shared<const TubeScene>(plant_->SceneAtUtime(slot.first_utime));
-  } else {
-    set.pose = PoseAt(trajectory_, set.t_seconds);
-    set.scene = std::make_shared<const TubeScene>(SceneOf(trajectory_, rig_, set.pose));
-  }
-  new_sets_.push_back(set);
-  history_.push_back(set);
-  if (new_sets_.size() > kKeptFrameSets) new_sets_.pop_front();
-  if (history_.size() > kKeptFrameSets) history_.pop_front();
-  return set;
+  faults_ = faults;
+  fault_random_.seed(faults.seed);
 }
 
-std::vector<FrameSet> FakeCameraServer::TakeNewFrameSets() {
+CameraExposure FakeCameraServer::Expose(int camera, int64_t utime) {
+  Slot& slot = *slots_[static_cast<size_t>(camera)];
   std::lock_guard lock(mutex_);
-  std::vector<FrameSet> taken(new_sets_.begin(), new_sets_.end());
-  new_sets_.clear();
+  CameraExposure exposure;
+  exposure.camera = camera;
+  exposure.frame_id = slot.exposures++ % kLastBlockId + 1;
+  exposure.utime = utime;
+  exposure.t_seconds = static_cast<double>(utime - origin_utime_) * 1e-6;
+  if (plant_ != nullptr) {
+    exposure.scene = std::make_shared<const TubeScene>(plant_->SceneAtUtime(utime));
+  } else {
+    exposure.pose = PoseAt(trajectory_, exposure.t_seconds);
+    exposure.scene = std::make_shared<const TubeScene>(SceneOf(trajectory_, rig_, exposure.pose));
+  }
+  std::deque<CameraExposure>& history = history_[static_cast<size_t>(camera)];
+  history.push_back(exposure);
+  if (history.size() > kKeptExposures) history.pop_front();
+  if (camera == 0) {
+    new_reference_.push_back(exposure);
+    if (new_reference_.size() > kKeptExposures) new_reference_.pop_front();
+  }
+  return exposure;
+}
+
+std::vector<CameraExposure> FakeCameraServer::TakeReferenceExposures() {
+  std::lock_guard lock(mutex_);
+  std::vector<CameraExposure> taken(new_reference_.begin(), new_reference_.end());
+  new_reference_.clear();
   return taken;
 }
 
-std::optional<FrameSet> FakeCameraServer::Find(int64_t seq) const {
+std::optional<CameraExposure> FakeCameraServer::FindExposure(int camera, int64_t frame_id) const {
   std::lock_guard lock(mutex_);
-  for (const FrameSet& set : history_) {
-    if (set.seq == seq) return set;
+  for (const CameraExposure& exposure : history_.at(static_cast<size_t>(camera))) {
+    if (exposure.frame_id == frame_id) return exposure;
   }
   return std::nullopt;
 }
 
-cv::Mat FakeCameraServer::Render(int camera, const FrameSet& set) const {
-  const uint64_t noise =
-      Mix(Mix(seed_) ^ static_cast<uint64_t>(set.seq)) ^ static_cast<uint64_t>(camera);
-  const Slot& slot = *slots_.at(static_cast<size_t>(camera));
-  const RenderedView view =
-      slot.renderer->Render(*set.scene, trajectory_.render, static_cast<uint32_t>(Mix(noise)))[0];
-  return backdrop_only_ ? view.background : view.image;
+cv::Mat FakeCameraServer::Render(const CameraExposure& exposure) const {
+  const uint64_t noise = Mix(Mix(seed_) ^ static_cast<uint64_t>(exposure.utime)) ^
+                         static_cast<uint64_t>(exposure.camera);
+  const Slot& slot = *slots_.at(static_cast<size_t>(exposure.camera));
+  const auto seed = static_cast<uint32_t>(Mix(noise));
+  if (backdrop_only_)
+    return slot.renderer->Render(*exposure.scene, trajectory_.render, seed)[0].background;
+  // About a third of the exact renderer's cost (tests/bench/render_bench).
+  return slot.renderer->RenderImage(0, *exposure.scene, trajectory_.render, seed);
 }
 
-cv::Mat FakeCameraServer::RenderOnWorker(int camera, const FrameSet& set) {
-  std::packaged_task<cv::Mat()> job([this, camera, set] { return Render(camera, set); });
+cv::Mat FakeCameraServer::RenderOnWorker(const CameraExposure& exposure) {
+  std::packaged_task<cv::Mat()> job([this, exposure] { return Render(exposure); });
   std::future<cv::Mat> image = job.get_future();
   {
     std::lock_guard lock(render_mutex_);
@@ -310,28 +346,52 @@ void FakeCameraServer::RenderJobs() {
   }
 }
 
+// A late answer: the camera's thread holds its image back, as a camera
+// whose link or host is slow; the triggers that come meanwhile wait, and
+// all but the last are missed.
+void FakeCameraServer::DelayAnswer() {
+  double delay_ms = 0.0;
+  {
+    std::lock_guard lock(mutex_);
+    if (faults_.answer_delay_max_ms <= 0.0) return;
+    delay_ms =
+        std::uniform_real_distribution<double>(0.0, faults_.answer_delay_max_ms)(fault_random_);
+  }
+  std::this_thread::sleep_for(std::chrono::duration<double, std::milli>(delay_ms));
+}
+
 // Never throws: it runs inside Aravis's C thread. An image it cannot make is
 // sent black and counted.
-int64_t FakeCameraServer::Fill(int camera, void* data, int width, int height,
-                               uint32_t pixel_format) {
+FakeCameraServer::Stamp FakeCameraServer::Fill(int camera, void* data, int width, int height,
+                                               uint32_t pixel_format) {
   const size_t size = static_cast<size_t>(width) * height * RawBytesPerPixel(pixel_format);
   Slot& slot = *slots_[static_cast<size_t>(camera)];
   const int64_t now = HostUtime();
-  // The image answers the trigger the watcher saw (else one that came
-  // within a poll, unseen).
-  const int64_t seen = slot.trigger_seen_utime.exchange(-1);
-  const int64_t asked = seen > 0 && seen <= now ? seen : now;
+  // The exposure began when the watcher saw the trigger (else just now: it
+  // came within the watcher's last millisecond).
+  int64_t seen = -1;
+  {
+    std::lock_guard lock(slot.seen_mutex);
+    if (slot.seen_fills == slot.fills) seen = slot.trigger_seen_utime;
+    slot.trigger_seen_utime = -1;
+    ++slot.fills;
+  }
+  const int64_t exposure_utime = seen > 0 && seen <= now ? seen : now;
+  Stamp stamp{0, exposure_utime};
   try {
-    const cv::Mat view = RenderOnWorker(camera, Assign(camera, asked));
+    const CameraExposure exposure = Expose(camera, exposure_utime);
+    stamp.frame_id = exposure.frame_id;
+    const cv::Mat view = RenderOnWorker(exposure);
     if (EncodeRawImage(view, pixel_format, width, height, static_cast<uint8_t*>(data), size)) {
       ++images_served_;
-      return now - asked;
+      DelayAnswer();
+      return stamp;
     }
   } catch (...) {
   }
   ++errors_;
   if (size > 0) std::memset(data, 0, size);
-  return now - asked;
+  return stamp;
 }
 
 }  // namespace shapesense

@@ -2,15 +2,24 @@
 
 // Every camera of a rig served as a real GigE Vision camera through Aravis's
 // ArvGvFakeCamera, each on its own address (127.0.0.1, 127.0.0.2 ... inside a
-// network namespace: the address must belong to an interface). A camera's
-// image is made when it is triggered: the frame-set it belongs to is chosen
-// by a FrameSetClock from the time its trigger arrived (a watcher thread
-// sees each camera's trigger register flip), the set's scene is the
-// trajectory (or, in plant mode, the plant: plant_world.h) at the time the
-// set's first trigger arrived, and each camera
-// renders its own view of it (in its own thread, with its own SceneRenderer)
-// in the pixel format the client set. The image's timestamp is its
-// trigger's arrival, its exposure, whenever the camera's thread got to it.
+// network namespace: the address must belong to an interface).
+//
+// Each camera times its images as a PTP-synchronised industrial camera
+// does: a software trigger starts an exposure when it reaches the camera (a
+// watcher thread sees each camera's trigger register flip, within about a
+// millisecond); the image shows the scene at that instant (the trajectory,
+// or in plant mode the plant: plant_world.h) and is stamped with it on the
+// host's clock, which is the virtual rig's PTP time; its block id counts
+// the camera's exposures. A trigger that arrives while the camera still
+// waits to serve the last one is missed, as on a real camera that is busy:
+// no exposure, no frame id. No camera knows of frame-sets: the capture
+// service proves which trigger each image answers from these facts alone.
+// Each camera renders its own view (its own SceneRenderer) on the render
+// threads, in the pixel format the client set.
+//
+// Faults for tests (SetFaults): images answered late, by a random delay
+// after their exposure (the camera misses the triggers that come meanwhile),
+// and triggers missed at random.
 
 #include <atomic>
 #include <condition_variable>
@@ -20,24 +29,32 @@
 #include <memory>
 #include <mutex>
 #include <optional>
+#include <random>
 #include <string>
 #include <thread>
 #include <vector>
 
 #include "libs/camera/camera.h"
 #include "libs/sim/tube_scene.h"
-#include "services/rig_sim/frame_set_clock.h"
 #include "services/rig_sim/plant_world.h"
 #include "services/rig_sim/trajectory.h"
 
 namespace shapesense {
 
-struct FrameSet {
-  int64_t seq = 0;
-  int64_t trigger_utime = 0;  // the set's first trigger, µs since epoch
-  double t_seconds = 0.0;     // trajectory time of its scene
-  TrajectoryPose pose;        // the trajectory's (not set in plant mode)
+// One exposure of one camera: when, and the scene it saw.
+struct CameraExposure {
+  int camera = 0;
+  int64_t frame_id = 0;    // the camera's exposures, from 1 (GigE Vision block id: 1-65535)
+  int64_t utime = 0;       // exposure start, µs since epoch (host clock = the rig's PTP time)
+  double t_seconds = 0.0;  // trajectory time of its scene
+  TrajectoryPose pose;     // the trajectory's (not set in plant mode)
   std::shared_ptr<const TubeScene> scene;
+};
+
+struct CameraFaults {
+  double answer_delay_max_ms = 0.0;  // each image sent 0 to this long after its exposure
+  double miss_ratio = 0.0;           // fraction of triggers the cameras miss
+  uint32_t seed = 1;
 };
 
 class FakeCameraServer {
@@ -69,29 +86,40 @@ class FakeCameraServer {
   // of the trajectory (its scene carries the plant's q). Before any Start().
   void SetPlant(std::shared_ptr<PlantWorld> plant) { plant_ = std::move(plant); }
 
-  // Frame-sets opened since the last call, oldest first (at most 1000 kept).
-  std::vector<FrameSet> TakeNewFrameSets();
-  // One of the last 1000 frame-sets.
-  std::optional<FrameSet> Find(int64_t seq) const;
-  // What camera `camera` shows for `set`: BGR at the rig camera's size (the
-  // backdrop's own rendering, with its own noise, when backdrop only).
-  cv::Mat Render(int camera, const FrameSet& set) const;
+  // Faults from now on (none by default).
+  void SetFaults(const CameraFaults& faults);
+
+  // The reference camera's (camera 0's) exposures since the last call,
+  // oldest first (at most 1000 kept): the rig's truth is published for each.
+  std::vector<CameraExposure> TakeReferenceExposures();
+  // One of a camera's last 1000 exposures, by frame id.
+  std::optional<CameraExposure> FindExposure(int camera, int64_t frame_id) const;
+  // What camera `camera` shows for its `exposure`: BGR at the rig camera's
+  // size, by SceneRenderer::RenderImage (the backdrop's own rendering, with
+  // its own noise, when backdrop only).
+  cv::Mat Render(const CameraExposure& exposure) const;
 
   int64_t images_served() const { return images_served_; }
   int64_t errors() const { return errors_; }
 
-  // The fill of one image (called by the camera's thread through Aravis).
-  // Returns how long its trigger waited for the camera's thread, µs.
-  int64_t Fill(int camera, void* data, int width, int height, uint32_t pixel_format);
+  // The fill of one image (called by the camera's thread through Aravis):
+  // the exposure it shows.
+  struct Stamp {
+    int64_t frame_id = 0;
+    int64_t exposure_utime = 0;
+  };
+  Stamp Fill(int camera, void* data, int width, int height, uint32_t pixel_format);
 
   struct Slot;  // one camera's state (fake_camera_server.cc)
 
  private:
-  FrameSet Assign(int camera, int64_t trigger_utime);
+  CameraExposure Expose(int camera, int64_t utime);
   void WatchTriggers();
+  void WatchTrigger(Slot& slot);
   // Render() on a render thread, waiting for it.
-  cv::Mat RenderOnWorker(int camera, const FrameSet& set);
+  cv::Mat RenderOnWorker(const CameraExposure& exposure);
   void RenderJobs();
+  void DelayAnswer();
 
   const Rig rig_;
   const TrajectoryOptions trajectory_;
@@ -106,10 +134,11 @@ class FakeCameraServer {
   std::atomic<bool> stop_watching_{false};
   std::thread watcher_;
 
-  mutable std::mutex mutex_;  // the clock and the frame-set lists
-  FrameSetClock clock_;
-  std::deque<FrameSet> new_sets_;
-  std::deque<FrameSet> history_;
+  mutable std::mutex mutex_;  // the exposures, the faults' random numbers and the plant
+  std::deque<CameraExposure> new_reference_;
+  std::vector<std::deque<CameraExposure>> history_;  // per camera
+  CameraFaults faults_;
+  std::mt19937 fault_random_{1};
   std::atomic<int64_t> images_served_{0};
   std::atomic<int64_t> errors_{0};
 

@@ -65,6 +65,14 @@ Setup LoadSetup(const RigSimArgs& args) {
     throw InputError("--packet-loss: expected a fraction 0-1, got " +
                      std::to_string(args.packet_loss));
   }
+  if (!(args.faults.answer_delay_max_ms >= 0.0 && args.faults.answer_delay_max_ms <= 1000.0)) {
+    throw InputError("--answer-delay-ms: expected 0-1000 ms, got " +
+                     std::to_string(args.faults.answer_delay_max_ms));
+  }
+  if (!(args.faults.miss_ratio >= 0.0 && args.faults.miss_ratio < 1.0)) {
+    throw InputError("--miss-ratio: expected a fraction in [0, 1), got " +
+                     std::to_string(args.faults.miss_ratio));
+  }
   if (!(args.duration_s >= 0.0)) {
     throw InputError("--duration: expected seconds >= 0, got " + std::to_string(args.duration_s));
   }
@@ -87,23 +95,29 @@ Setup LoadSetup(const RigSimArgs& args) {
   return setup;
 }
 
-// The truth of a frame-set: the trajectory's, or in plant mode the plant's (with q).
-shape_t TruthOf(const FrameSet& set, const PlantWorld* plant, int64_t seq) {
+// The truth at one of the reference camera's exposures: the trajectory's, or
+// in plant mode the plant's (with q). Its trigger_seq is the exposure's frame
+// id, its trigger_utime the exposure's time: every frame-set's images are
+// exposed within a few milliseconds after their trigger, so the truth of a
+// set is the one that follows its trigger time most closely.
+shape_t TruthOf(const CameraExposure& exposure, const PlantWorld* plant, int64_t seq) {
   if (plant != nullptr) {
-    return plant->TruthMessage(*set.scene, set.seq, set.trigger_utime, seq, NowUtime());
+    return plant->TruthMessage(*exposure.scene, exposure.frame_id, exposure.utime, seq,
+                               NowUtime());
   }
-  return FrameSetTruth(*set.scene, set.pose, set.seq, set.trigger_utime, seq, NowUtime());
+  return FrameSetTruth(*exposure.scene, exposure.pose, exposure.frame_id, exposure.utime, seq,
+                       NowUtime());
 }
 
 void PublishTruth(FakeCameraServer& server, LcmBus& bus, ServiceStatus& status, int64_t* seq,
                   bool backdrop_only, const PlantWorld* plant) {
-  for (const FrameSet& set : server.TakeNewFrameSets()) {
+  for (const CameraExposure& exposure : server.TakeReferenceExposures()) {
     if (backdrop_only) continue;  // nothing to measure
-    const shape_t truth = TruthOf(set, plant, (*seq)++);
+    const shape_t truth = TruthOf(exposure, plant, (*seq)++);
     if (bus.Publish(channels::kTruth, truth)) {
       status.Published();
     } else {
-      status.Error("cannot publish the truth of frame-set " + std::to_string(set.seq));
+      status.Error("cannot publish the truth of exposure " + std::to_string(exposure.frame_id));
     }
   }
 }
@@ -230,6 +244,9 @@ void RunRigSim(const RigSimArgs& args, const std::atomic<bool>& stop, RigSimCont
   FakeCameraServer server(setup.rig, setup.trajectory, setup.addresses, args.seed, start_utime);
   server.SetPacketLoss(args.packet_loss);
   server.SetBackdropOnly(args.backdrop_only);
+  CameraFaults faults = args.faults;
+  faults.seed = args.seed + 1;
+  server.SetFaults(faults);
   if (plant) server.SetPlant(plant->world());
   StartCameras(server, setup);
   int64_t truth_seq = 0, images = 0, errors = 0;

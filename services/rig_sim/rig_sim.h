@@ -4,15 +4,16 @@
 // scripted trajectory (trajectory.h), rendered into every camera of a rig,
 // each camera served as a real GigE Vision camera on its own address
 // (fake_camera_server.h), so the capture service reads it with its Aravis
-// backend over the real protocol. The ground truth of every frame-set goes
-// out on channels::kTruth (shape_t, frame_set_truth.h); status at 1 Hz on
-// channels::Status("rig_sim").
+// backend over the real protocol. The ground truth at every exposure of the
+// reference camera (the first) goes out on channels::kTruth (shape_t,
+// frame_set_truth.h); status at 1 Hz on channels::Status("rig_sim").
 //
 // Plant mode (--plant, plant_world.h): the manipulator is the tendon plant
 // the controller drives over channels::kPlantCommand, its actuators
 // published on channels::kPlantState; the truth carries the plant's q.
 //
-// Faults for tests: a ratio of lost stream packets (--packet-loss), and a
+// Faults for tests: a ratio of lost stream packets (--packet-loss), images
+// answered late (--answer-delay-ms) and triggers missed (--miss-ratio), and a
 // camera taken off the network and brought back, on a schedule (--outage) or
 // on request (SIGUSR1 stops the fault camera, SIGUSR2 starts it again).
 
@@ -22,6 +23,7 @@
 #include <vector>
 
 #include "libs/camera/camera.h"
+#include "services/rig_sim/fake_camera_server.h"
 
 namespace shapesense {
 
@@ -44,6 +46,8 @@ struct RigSimArgs {
   // Serve the backdrop alone, no manipulator and no truth (for the capture
   // service's background command).
   bool backdrop_only = false;
+  // Late answers and missed triggers, for tests (fake_camera_server.h).
+  CameraFaults faults;
   // Write the rig in use (e.g. the synthetic one) here, for the other services.
   std::string write_rig_path;
 };

@@ -38,6 +38,9 @@ CameraConfig CameraAt(int index, const std::string& pixel_format = "RGB8") {
   config.name = "cam" + std::to_string(index);
   config.device = LoopbackAddress(index);
   config.pixel_format = pixel_format;
+  // One trigger at a time here: a generous latency keeps a loaded test
+  // machine's late watcher from dropping frames these tests look at.
+  config.trigger_latency_us = 50'000;
   return config;
 }
 
@@ -52,13 +55,14 @@ std::vector<std::unique_ptr<CameraBackend>> OpenCameras(const std::vector<std::s
 
 // Triggers every camera for `seq` and grabs each one's frame (empty on timeout).
 std::vector<std::optional<CameraFrame>> TriggerSet(
-    std::vector<std::unique_ptr<CameraBackend>>& cameras, int64_t seq) {
+    std::vector<std::unique_ptr<CameraBackend>>& cameras, int64_t seq,
+    milliseconds timeout = milliseconds(5000)) {
   const int64_t now = NowUtime();
   for (auto& camera : cameras) camera->Trigger(seq, now);
   std::vector<std::optional<CameraFrame>> frames;
   for (auto& camera : cameras) {
     CameraFrame frame;
-    frames.push_back(camera->Grab(milliseconds(5000), &frame) ? std::optional(frame)
+    frames.push_back(camera->Grab(timeout, &frame) ? std::optional(frame)
                                                               : std::nullopt);
   }
   return frames;
@@ -77,32 +81,68 @@ class RigSimNetworkTest : public ::testing::Test {
   void SetUp() override { ASSERT_EQ(nettest::PrivateNetworkError(), ""); }
 };
 
-TEST_F(RigSimNetworkTest, EveryCameraOfAFrameSetShowsThatSetsScene) {
+// What a PTP-synchronised camera reports: each image is stamped with its
+// exposure on the host's clock, after its trigger left and within the
+// camera's latency of its acknowledgement, its block id counts exposures,
+// and it shows the scene at that instant, pixel for pixel.
+TEST_F(RigSimNetworkTest, EveryImageShowsTheSceneAtTheExposureItIsStampedWith) {
   const Rig rig = MakeSyntheticRig(SyntheticRigOptions{});
   FakeCameraServer server(rig, TrajectoryOptions{}, {"127.0.0.1", "127.0.0.2", "127.0.0.3"}, 11,
                           NowUtime());
   for (int i = 0; i < 3; ++i) server.Start(i);
   const std::vector<std::string> formats = {"RGB8", "Mono8", "BayerRG8"};
   auto cameras = OpenCameras(formats);
-  double last_t = -1.0;
+  std::vector<int64_t> last_exposure(3, 0);
   for (int64_t seq = 0; seq < 6; ++seq) {
+    const int64_t before = NowUtime();
     const auto frames = TriggerSet(cameras, seq);
-    const std::optional<FrameSet> set = server.Find(seq);
-    ASSERT_TRUE(set.has_value()) << "the rig-sim has no frame-set " << seq;
-    EXPECT_GT(set->t_seconds, last_t);
-    last_t = set->t_seconds;
     for (int i = 0; i < 3; ++i) {
       ASSERT_TRUE(frames[i].has_value()) << "camera " << i << " set " << seq;
       EXPECT_EQ(frames[i]->trigger_seq, seq);
-      const cv::Mat expected = AsDelivered(server.Render(i, *set), formats[i]);
+      EXPECT_EQ(frames[i]->frame_id, seq + 1) << "block ids count exposures from 1";
+      const std::optional<CameraExposure> exposure = server.FindExposure(i, frames[i]->frame_id);
+      ASSERT_TRUE(exposure.has_value()) << "camera " << i << " has no exposure " << seq + 1;
+      EXPECT_EQ(frames[i]->device_timestamp_ns, exposure->utime * 1000);
+      EXPECT_GE(exposure->utime, before);
+      EXPECT_GT(exposure->utime, last_exposure[static_cast<size_t>(i)]);
+      last_exposure[static_cast<size_t>(i)] = exposure->utime;
+      const cv::Mat expected = AsDelivered(server.Render(*exposure), formats[i]);
       ASSERT_EQ(frames[i]->image.type(), expected.type());
       EXPECT_EQ(cv::norm(frames[i]->image, expected, cv::NORM_INF), 0.0)
-          << "camera " << i << " (" << formats[i] << ") does not show frame-set " << seq;
+          << "camera " << i << " (" << formats[i] << ") does not show its exposure " << seq + 1;
     }
   }
-  EXPECT_FALSE(server.Find(6).has_value()) << "one frame-set per trigger round";
+  EXPECT_FALSE(server.FindExposure(0, 7).has_value()) << "one exposure per trigger";
+  EXPECT_EQ(server.TakeReferenceExposures().size(), 6u) << "camera 0's exposures, for the truth";
   EXPECT_EQ(server.images_served(), 18);
   EXPECT_EQ(server.errors(), 0);
+}
+
+// Missed triggers make no image and no exposure: those triggers go
+// unanswered, and nothing is taken for them. (The fault acts when the
+// watcher sees the trigger first; on a busy machine the camera's own thread
+// may serve one before.)
+TEST_F(RigSimNetworkTest, MissedTriggersMakeNoExposure) {
+  const Rig rig = MakeSyntheticRig(SyntheticRigOptions{});
+  FakeCameraServer server(rig, TrajectoryOptions{}, {"127.0.0.1", "127.0.0.2", "127.0.0.3"}, 5,
+                          NowUtime());
+  server.Start(0);
+  auto cameras = OpenCameras({"RGB8"});
+  ASSERT_TRUE(TriggerSet(cameras, 0)[0].has_value());
+  CameraFaults faults;
+  faults.miss_ratio = 0.999;
+  server.SetFaults(faults);
+  int answered = 0;
+  for (int64_t seq = 1; seq <= 10; ++seq) {
+    const std::optional<CameraFrame> frame = TriggerSet(cameras, seq, milliseconds(300))[0];
+    if (!frame) continue;
+    ++answered;
+    EXPECT_EQ(frame->trigger_seq, seq) << "an image answers its own trigger";
+  }
+  EXPECT_LE(answered, 3);
+  EXPECT_EQ(server.images_served(), 1 + answered);
+  EXPECT_FALSE(server.FindExposure(0, 2 + answered).has_value());
+  EXPECT_EQ(cameras[0]->Stats().unmatched_frames, 0);
 }
 
 // The tube's pixels: much less green than the backdrop.
@@ -211,13 +251,20 @@ TEST_F(RigSimNetworkTest, TheServicePublishesTruthThatItsImagesShow) {
   auto cameras = OpenCameras({"RGB8", "RGB8", "RGB8"});
   const Rig rig = ParseRigYaml(ReadTextFile(rig_path), rig_path);
   ASSERT_EQ(rig.cameras.size(), 3u);
+  // By the reference camera's (cam0's) frame id, which the truth carries.
+  // The truth is the scene at cam0's exposure; another camera's image is
+  // held to it when that camera was exposed within a millisecond of cam0
+  // (the triggers go out one after the other; on a busy machine, further apart).
   std::map<int64_t, std::vector<cv::Mat>> images;
+  std::map<int64_t, std::vector<bool>> simultaneous;
   for (int64_t seq = 0; seq < 8; ++seq) {
     const auto frames = TriggerSet(cameras, seq);
     for (const auto& frame : frames) {
       ASSERT_TRUE(frame.has_value()) << "set " << seq;
       EXPECT_EQ(frame->trigger_seq, seq);
-      images[seq].push_back(frame->image);
+      images[frames[0]->frame_id].push_back(frame->image);
+      simultaneous[frames[0]->frame_id].push_back(
+          std::llabs(frame->device_timestamp_ns - frames[0]->device_timestamp_ns) <= 1'000'000);
     }
   }
   std::map<int64_t, shape_t> truths;
@@ -225,21 +272,22 @@ TEST_F(RigSimNetworkTest, TheServicePublishesTruthThatItsImagesShow) {
     std::this_thread::sleep_for(milliseconds(50));
     truths = listener.Truths();
   }
-  ASSERT_EQ(truths.size(), 8u) << "one truth message per frame-set";
+  ASSERT_EQ(truths.size(), 8u) << "one truth message per exposure of the reference camera";
   int told_apart = 0;  // images the previous set's truth does not fit
   for (const auto& [seq, truth] : truths) {
-    ASSERT_TRUE(images.contains(seq)) << "truth for a frame-set nobody triggered: " << seq;
+    ASSERT_TRUE(images.contains(seq)) << "truth for an exposure nobody triggered: " << seq;
     EXPECT_TRUE(truth.valid);
     for (size_t i = 0; i < 3; ++i) {
+      if (!simultaneous[seq][i]) continue;
       EXPECT_GT(FractionOnTube(truth, rig.cameras[i], images[seq][i]), 0.95)
           << "camera " << i << " does not show the truth of set " << seq;
-      if (seq > 0 && FractionOnTube(truths[seq - 1], rig.cameras[i], images[seq][i]) < 0.9) {
+      if (seq > 1 && FractionOnTube(truths[seq - 1], rig.cameras[i], images[seq][i]) < 0.9) {
         ++told_apart;
       }
     }
   }
   // The swing reverses every 0.2 s, where consecutive sets look alike.
-  EXPECT_GE(told_apart, 12) << "of 21: the check cannot tell consecutive sets apart";
+  EXPECT_GE(told_apart, 6) << "of up to 21: the check cannot tell consecutive sets apart";
   cameras.clear();  // while their device still answers (else each waits out GVCP timeouts)
   EXPECT_EQ(rig_sim.Stop(), 0) << "a clean stop on SIGTERM";
 }
