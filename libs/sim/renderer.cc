@@ -1,8 +1,8 @@
 // RenderScene and SceneRenderer (declared in tube_scene.h).
 #include <algorithm>
 #include <array>
-#include <mutex>
 #include <cmath>
+#include <mutex>
 #include <opencv2/imgproc.hpp>
 #include <stdexcept>
 

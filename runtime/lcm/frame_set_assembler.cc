@@ -161,12 +161,11 @@ int FrameSetAssembler::Expire(int64_t now_utime) {
   return expired;
 }
 
-bool FrameSetAssembler::Conflicts(const Pending& pending, const image_t& image,
-                                  size_t slot) const {
+bool FrameSetAssembler::Conflicts(const Pending& pending, const image_t& image, size_t slot) const {
   if (pending.set.trigger_seq < 0) return false;  // matched by time: nothing to contradict
   const image_t& held = pending.set.images[slot];
-  if (!held.camera.empty() && (held.frame_id != image.frame_id ||
-                               held.device_timestamp_ns != image.device_timestamp_ns)) {
+  if (!held.camera.empty() &&
+      (held.frame_id != image.frame_id || held.device_timestamp_ns != image.device_timestamp_ns)) {
     return true;
   }
   return pending.received > 0 && image.trigger_utime != pending.given_trigger_utime;
@@ -222,8 +221,9 @@ AssemblyResult FrameSetAssembler::Add(image_t image, int64_t now_utime) {
   const auto it = std::find_if(pending_.begin(), pending_.end(),
                                [&](const Pending& p) { return &p == pending; });
   if (it->set.trigger_seq >= 0 && ExposureSpread(it->set) > max_spread_us_) {
-    last_drop_ = "frame-set " + std::to_string(it->set.trigger_seq) + " dropped: its exposures lie " +
-                 std::to_string(ExposureSpread(it->set)) + " us apart";
+    last_drop_ = "frame-set " + std::to_string(it->set.trigger_seq) +
+                 " dropped: its exposures lie " + std::to_string(ExposureSpread(it->set)) +
+                 " us apart";
     pending_.erase(it);
     ++counters_.spread;
     return {AssemblyOutcome::kSpread, std::nullopt};

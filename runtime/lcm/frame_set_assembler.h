@@ -27,7 +27,7 @@ struct FrameSetAssemblyOptions {
   // Triggered cameras stamping their exposures on one clock (PTP): a set
   // whose exposures lie further apart than this is dropped and counted (its
   // views would not show one shape), ms.
-  double max_exposure_spread_ms = 5.0;
+  double max_exposure_spread_ms = 10.0;
 
   template <class Visitor>
   void VisitFields(Visitor&& visit) {
@@ -81,8 +81,8 @@ struct AssemblyResult {
 
 struct AssemblyCounters {
   int64_t completed = 0;
-  int64_t timed_out = 0;  // incomplete sets dropped after the timeout
-  int64_t evicted = 0;    // incomplete sets dropped to stay within max_pending
+  int64_t timed_out = 0;    // incomplete sets dropped after the timeout
+  int64_t evicted = 0;      // incomplete sets dropped to stay within max_pending
   int64_t conflicting = 0;  // sets dropped because their images disagree on their trigger
   int64_t spread = 0;       // sets dropped because their exposures lie too far apart
   int64_t duplicates = 0;
@@ -120,7 +120,7 @@ class FrameSetAssembler {
  private:
   struct Pending {
     FrameSet set;
-    int64_t reference_utime = 0;  // the first image's time: free-running images match it
+    int64_t reference_utime = 0;      // the first image's time: free-running images match it
     int64_t given_trigger_utime = 0;  // the first image's trigger_utime, as it came
     int received = 0;
   };

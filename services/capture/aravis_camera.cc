@@ -372,8 +372,7 @@ bool AravisCamera::TakeBuffer(ArvBuffer* buffer, CameraFrame* frame) {
   const int64_t received_ns = static_cast<int64_t>(arv_buffer_get_system_timestamp(buffer));
   const int64_t device_ns = static_cast<int64_t>(arv_buffer_get_timestamp(buffer));
   const ExposureStamp timing{static_cast<int64_t>(arv_buffer_get_frame_id(buffer)),
-                             device_ns / 1000,
-                             received_ns != 0 ? received_ns / 1000 : HostUtime()};
+                             device_ns / 1000, received_ns != 0 ? received_ns / 1000 : HostUtime()};
   const bool complete = arv_buffer_get_status(buffer) == ARV_BUFFER_STATUS_SUCCESS;
   std::unique_lock lock(mutex_);
   matcher_.Expire(timing.received_utime);

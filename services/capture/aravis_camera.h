@@ -10,10 +10,10 @@
 // incomplete or corrupted ones are dropped and counted. Each frame carries
 // the frame-set of the software trigger it answers, proven by its exposure
 // timestamp (PTP time) against the trigger's window (exposure_matcher.h);
-// a frame nothing proves is dropped and counted with its reason. A lost device (heartbeat lost, a failed
-// trigger, or a device that stops answering while no frames come) makes
-// Grab() throw CameraError; Close() then Open() reconnects once it is back.
-// Every error names the camera and the device.
+// a frame nothing proves is dropped and counted with its reason. A lost device (heartbeat lost, a
+// failed trigger, or a device that stops answering while no frames come) makes Grab() throw
+// CameraError; Close() then Open() reconnects once it is back. Every error names the camera and the
+// device.
 //
 // Open() and a Trigger() to a device that vanished block for Aravis's GVCP
 // timeout (5 tries of 500 ms in 0.8), and so does Close() of one that

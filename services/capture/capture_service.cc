@@ -366,7 +366,8 @@ CaptureSummary CaptureService::Run(const std::atomic<bool>& stop) {
   // half a period) after its frame-set's time is stale: the camera's image
   // would show the scene that much later than its set's time says.
   const double period_us = 1e6 / options_.trigger_rate_hz;
-  stale_trigger_us_ = static_cast<int64_t>(std::min(0.5 * period_us, std::max(2'000.0, 0.2 * period_us)));
+  stale_trigger_us_ =
+      static_cast<int64_t>(std::min(0.5 * period_us, std::max(2'000.0, 0.2 * period_us)));
   std::vector<std::thread> threads;
   bool any_software = false;
   for (const auto& slot : slots_) {

@@ -31,6 +31,8 @@ const char* MatchVerdictName(MatchVerdict verdict) {
       return "inside two triggers' windows";
     case MatchVerdict::kAnsweredAlready:
       return "for a trigger answered already";
+    case MatchVerdict::kLateTrigger:
+      return "for a trigger that reached the camera late";
     case MatchVerdict::kCount:
       break;
   }
@@ -78,6 +80,9 @@ MatchResult ExposureMatcher::Match(const ExposureStamp& frame) {
   }
   Window& window = windows_[*holder];
   window.answered = true;
+  if (window.trigger.acked_utime - window.trigger.sent_utime > options_.max_round_trip_us) {
+    return Count(MatchVerdict::kLateTrigger);
+  }
   return Count(MatchVerdict::kMatched, window.trigger);
 }
 
@@ -105,8 +110,7 @@ std::optional<size_t> ExposureMatcher::HolderOf(int64_t exposure_utime,
 void ExposureMatcher::Expire(int64_t now_utime) {
   while (!windows_.empty()) {
     const Window& oldest = windows_.front();
-    const int64_t closes =
-        oldest.trigger.acked_utime + options_.max_latency_us + options_.keep_us;
+    const int64_t closes = oldest.trigger.acked_utime + options_.max_latency_us + options_.keep_us;
     if (closes > now_utime) return;
     if (!oldest.answered) ++unanswered_;
     windows_.pop_front();

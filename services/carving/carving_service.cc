@@ -44,15 +44,14 @@ CarvingService::CarvingService(const CarvingServiceOptions& options, RigSetup se
         if (hooks_.before_carving) hooks_.before_carving(set);
         CarveAndPublish(set);
       }) {
-  bus_.Subscribe<image_t>(channels::kImagePattern,
-                          [this](image_t&& image, const std::string& channel,
-                                 int64_t receive_utime) {
-                            OnImage(std::move(image), channel, receive_utime);
-                          });
+  bus_.Subscribe<image_t>(
+      channels::kImagePattern,
+      [this](image_t&& image, const std::string& channel, int64_t receive_utime) {
+        OnImage(std::move(image), channel, receive_utime);
+      });
 }
 
-void CarvingService::OnImage(image_t&& image, const std::string& channel,
-                             int64_t receive_utime) {
+void CarvingService::OnImage(image_t&& image, const std::string& channel, int64_t receive_utime) {
   status_.Received();
   if (const std::string error = ValidateImageMessage(image); !error.empty()) {
     status_.Rejected();

@@ -196,8 +196,8 @@ void FakeCameraServer::WatchTrigger(Slot& slot) {
   bool missed = false;
   {
     std::lock_guard lock(mutex_);
-    missed = faults_.miss_ratio > 0.0 &&
-             std::bernoulli_distribution(faults_.miss_ratio)(fault_random_);
+    missed =
+        faults_.miss_ratio > 0.0 && std::bernoulli_distribution(faults_.miss_ratio)(fault_random_);
   }
   if (missed) {
     ForgetEarlierTriggers(slot, fake);

@@ -52,7 +52,8 @@ int main(int argc, char** argv) {
   app.add_option("--duration", args.duration_s, "seconds to run (default: until stopped)");
   app.add_option("--answer-delay-ms", args.faults.answer_delay_max_ms,
                  "fault: each image sent up to this long after its exposure (misses triggers)");
-  app.add_option("--miss-ratio", args.faults.miss_ratio, "fault: fraction of triggers missed (0-1)");
+  app.add_option("--miss-ratio", args.faults.miss_ratio,
+                 "fault: fraction of triggers missed (0-1)");
   app.add_option("--outage", args.outages, "CAMERA:START_S:DURATION_S, a camera off the network");
   app.add_option("--fault-camera", args.fault_camera, "camera SIGUSR1 stops, SIGUSR2 restarts");
   app.add_flag("--backdrop-only", args.backdrop_only, "no manipulator, no truth (backgrounds)");

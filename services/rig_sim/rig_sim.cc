@@ -102,8 +102,7 @@ Setup LoadSetup(const RigSimArgs& args) {
 // set is the one that follows its trigger time most closely.
 shape_t TruthOf(const CameraExposure& exposure, const PlantWorld* plant, int64_t seq) {
   if (plant != nullptr) {
-    return plant->TruthMessage(*exposure.scene, exposure.frame_id, exposure.utime, seq,
-                               NowUtime());
+    return plant->TruthMessage(*exposure.scene, exposure.frame_id, exposure.utime, seq, NowUtime());
   }
   return FrameSetTruth(*exposure.scene, exposure.pose, exposure.frame_id, exposure.utime, seq,
                        NowUtime());

@@ -33,34 +33,36 @@ TubeScene SceneAtStep(const Rig& rig, uint32_t step) {
   return SceneOf(motion, rig, PoseAt(motion, 0.01 * step));
 }
 
-// The exact renderer: image, background and truth mask.
-void BM_RenderExact(benchmark::State& state) {
+// Renders the trajectory's scenes one after the other with `render`.
+template <class RenderOne>
+void RenderAlongTheTrajectory(benchmark::State& state, RenderOne render) {
   TuneHeap();
   const Rig rig = OneCamera();
   const SceneRenderer renderer(rig);
   uint32_t step = 0;
   for (auto _ : state) {
     ++step;
-    benchmark::DoNotOptimize(renderer.Render(SceneAtStep(rig, step), RenderOptions{}, step));
+    benchmark::DoNotOptimize(render(renderer, SceneAtStep(rig, step), step));
   }
   state.counters["views_per_s"] =
       benchmark::Counter(static_cast<double>(state.iterations()), benchmark::Counter::kIsRate);
+}
+
+// The exact renderer: image, background and truth mask.
+void BM_RenderExact(benchmark::State& state) {
+  RenderAlongTheTrajectory(state,
+                           [](const SceneRenderer& r, const TubeScene& scene, uint32_t seed) {
+                             return r.Render(scene, RenderOptions{}, seed);
+                           });
 }
 BENCHMARK(BM_RenderExact)->Unit(benchmark::kMillisecond);
 
 // The rig-sim's: the image alone, the tube over a pooled backdrop.
 void BM_RenderImageForTheRig(benchmark::State& state) {
-  TuneHeap();
-  const Rig rig = OneCamera();
-  const SceneRenderer renderer(rig);
-  uint32_t step = 0;
-  for (auto _ : state) {
-    ++step;
-    benchmark::DoNotOptimize(
-        renderer.RenderImage(0, SceneAtStep(rig, step), RenderOptions{}, step));
-  }
-  state.counters["views_per_s"] =
-      benchmark::Counter(static_cast<double>(state.iterations()), benchmark::Counter::kIsRate);
+  RenderAlongTheTrajectory(state,
+                           [](const SceneRenderer& r, const TubeScene& scene, uint32_t seed) {
+                             return r.RenderImage(0, scene, RenderOptions{}, seed);
+                           });
 }
 BENCHMARK(BM_RenderImageForTheRig)->Unit(benchmark::kMillisecond);
 

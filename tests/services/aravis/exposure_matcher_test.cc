@@ -18,9 +18,9 @@ namespace {
 
 struct Scenario {
   int64_t period_us = 33'000;
-  int64_t max_latency_us = 4'000;  // the matcher's bound
-  int64_t latency_us = 3'000;      // the camera's actual longest latency
-  int64_t round_trip_us = 800;     // longest send -> acknowledged
+  int64_t max_latency_us = 4'000;     // the matcher's bound
+  int64_t latency_us = 3'000;         // the camera's actual longest latency
+  int64_t round_trip_us = 800;        // longest send -> acknowledged
   int64_t arrival_delay_us = 66'000;  // longest exposure -> frame received
   double miss = 0.0;
   double lost = 0.0;
@@ -236,6 +236,15 @@ TEST_F(ExposureMatcherCase, DropsAnExposureBeforeItsTriggerLeftOrPastItsLatency)
   EXPECT_EQ(matcher_.Match(FrameOf(0, 10, -50)).verdict, MatchVerdict::kOutsideWindows);
   EXPECT_EQ(matcher_.Match(FrameOf(0, 11, 400 + 4'001)).verdict, MatchVerdict::kOutsideWindows);
   EXPECT_EQ(matcher_.Match(FrameOf(0, 12, 400 + 4'000)).trigger->seq, 0);
+}
+
+// A trigger acknowledged long after it left (the camera was busy) reached the
+// camera too late: its frame shows a later moment than its set's time.
+TEST_F(ExposureMatcherCase, DropsTheFrameOfATriggerThatReachedTheCameraLate) {
+  matcher_.Sent({3, 1'040'000, 1'040'100, 1'040'100 + 5'001});
+  const ExposureStamp frame{20, 1'040'100 + 5'500, 1'050'000};
+  EXPECT_EQ(matcher_.Match(frame).verdict, MatchVerdict::kLateTrigger);
+  EXPECT_EQ(matcher_.count(MatchVerdict::kLateTrigger), 1);
 }
 
 TEST_F(ExposureMatcherCase, CountsUnansweredTriggersOnceTheirWindowsPassed) {
