@@ -429,12 +429,13 @@ cv::Mat DecodeAravisImage(uint32_t pixel_format, const void* data, size_t size, 
   // A view of the buffer (not written); every branch copies out of it.
   const cv::Mat raw(height, width, colour ? CV_8UC3 : CV_8UC1, const_cast<void*>(data));
   cv::Mat image;
-  if (pixel_format == genicam::kRgb8)
+  if (pixel_format == genicam::kRgb8) {
     cv::cvtColor(raw, image, cv::COLOR_RGB2BGR);
-  else if (bayer >= 0)
+  } else if (bayer >= 0) {
     cv::cvtColor(raw, image, bayer);
-  else
+  } else {
     raw.copyTo(image);
+  }
   return image;
 }
 

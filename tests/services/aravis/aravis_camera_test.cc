@@ -94,7 +94,7 @@ TEST_F(AravisCameraTest, EveryPixelFormatDecodesToWhatTheCameraSent) {
     const std::optional<CameraFrame> frame = TriggerAndGrab(*camera, 0);
     ASSERT_TRUE(frame.has_value()) << format;
     const uint32_t code = AravisPixelFormatCode(format);
-    const size_t bytes = 64 * 48 * (format == "RGB8" ? 3 : 1);
+    const size_t bytes = size_t{64} * 48 * (format == "RGB8" ? 3 : 1);
     frames_before += kWarmUpFills;
     const std::vector<uint8_t> sent = nettest::PatternBytes(frames_before, bytes);
     const cv::Mat expected = DecodeAravisImage(code, sent.data(), sent.size(), 64, 48);

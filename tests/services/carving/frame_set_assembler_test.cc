@@ -37,8 +37,7 @@ FrameSetAssemblyOptions Options(double timeout_ms = 100, int max_pending = 4) {
 TEST(FrameSetAssemblerTest, ImagesThatDisagreeOnTheirTriggerDropTheSet) {
   FrameSetAssembler assembler(kCameras, Options());
   ASSERT_EQ(assembler.Add(Image("cam0", 5), 10).outcome, AssemblyOutcome::kPending);
-  EXPECT_EQ(assembler.Add(Image("cam1", 5, 1'000'001), 20).outcome,
-            AssemblyOutcome::kConflicting);
+  EXPECT_EQ(assembler.Add(Image("cam1", 5, 1'000'001), 20).outcome, AssemblyOutcome::kConflicting);
   EXPECT_EQ(assembler.pending(), 0u);
   EXPECT_EQ(assembler.Add(Image("cam2", 5), 30).outcome, AssemblyOutcome::kLate);
 
@@ -164,6 +163,7 @@ TEST(FrameSetAssemblerTest, FreeRunningCamerasAreMatchedByTimeWithinTheTolerance
   for (int frame = 0; frame < 20; ++frame) {
     const int64_t t = 1'000'000 + frame * 33'333;
     std::vector<image_t> images;
+    images.reserve(kCameras.size());
     for (const std::string& camera : kCameras) {
       images.push_back(Image(camera, -1, t + static_cast<int64_t>(rng() % 1500)));
     }

@@ -205,7 +205,7 @@ class TruthListener {
 
 // A fast swing, so that consecutive frame-sets look clearly different.
 std::string FastTrajectoryFile() {
-  const std::string path = ::testing::TempDir() + "rig_sim_fast_trajectory.yaml";
+  std::string path = ::testing::TempDir() + "rig_sim_fast_trajectory.yaml";
   std::ofstream(path) << "keyframes:\n"
                          "  - {time: 0.0, shape: arc, length: 160, bend_angle: 1.5}\n"
                          "  - {time: 0.2, shape: arc, length: 160, bend_angle: -1.5}\n"
@@ -234,8 +234,8 @@ double FractionOnTube(const shape_t& truth, const Camera& camera, const cv::Mat&
   for (const std::vector<double>& p : truth.centerline) {
     const std::optional<Vec2> pixel = camera.Project(Vec3(p[0], p[1], p[2]));
     if (!pixel || !camera.InImage(*pixel)) continue;
-    const cv::Vec3b bgr = image.at<cv::Vec3b>(static_cast<int>(std::lround((*pixel)(1))),
-                                              static_cast<int>(std::lround((*pixel)(0))));
+    const cv::Vec3b& bgr = image.at<cv::Vec3b>(static_cast<int>(std::lround((*pixel)(1))),
+                                               static_cast<int>(std::lround((*pixel)(0))));
     if (bgr[1] < 120) ++on;
   }
   return static_cast<double>(on) / static_cast<double>(truth.centerline.size());
