@@ -60,6 +60,7 @@ std::string TakeMessage(GError*& error) {
 ExposureMatcherOptions MatcherOptions(const CameraConfig& config) {
   ExposureMatcherOptions options;
   options.max_latency_us = static_cast<int64_t>(config.trigger_latency_us);
+  options.max_exposure_delay_us = static_cast<int64_t>(config.max_exposure_delay_us);
   return options;
 }
 

@@ -97,6 +97,9 @@ std::string ValidateTrigger(const CameraConfig& config) {
   if (!(config.trigger_latency_us >= 1.0 && config.trigger_latency_us <= 100'000.0)) {
     return Expected("trigger_latency_us", "1-100000 µs", config.trigger_latency_us);
   }
+  if (!(config.max_exposure_delay_us >= 1.0 && config.max_exposure_delay_us <= 1e6)) {
+    return Expected("max_exposure_delay_us", "1-1000000 µs", config.max_exposure_delay_us);
+  }
   return "";
 }
 

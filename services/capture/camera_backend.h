@@ -46,11 +46,12 @@ struct CameraConfig {
   // with the host's clock, or the virtual rig's cameras, on the host's
   // clock): triggered frames are matched to their trigger by exposure time.
   std::string timestamp_clock = "ptp";
-  double trigger_latency_us = 4000.0;  // longest trigger -> exposure start
-  int packet_size = 0;                 // GigE packet size, bytes (0: negotiate)
-  int socket_buffer = 0;               // GigE socket buffer, bytes (0: Aravis default)
-  int buffer_count = 8;                // stream / mmap buffers
-  bool loop = true;                    // replay: start again at the end
+  double trigger_latency_us = 4000.0;      // longest trigger -> exposure start
+  double max_exposure_delay_us = 10000.0;  // longest frame-set time -> exposure start
+  int packet_size = 0;                     // GigE packet size, bytes (0: negotiate)
+  int socket_buffer = 0;                   // GigE socket buffer, bytes (0: Aravis default)
+  int buffer_count = 8;                    // stream / mmap buffers
+  bool loop = true;                        // replay: start again at the end
 
   template <class Visitor>
   void VisitFields(Visitor&& visit) {
@@ -70,6 +71,8 @@ struct CameraConfig {
           "aravis: ptp (device timestamps on the host's clock; docs/capture.md)");
     visit("trigger_latency_us", trigger_latency_us,
           "aravis: longest time from a trigger's receipt to its exposure, µs (1-100000)");
+    visit("max_exposure_delay_us", max_exposure_delay_us,
+          "aravis: a frame exposed later after its frame-set's time is dropped, µs (1-1000000)");
     visit("packet_size", packet_size, "GigE packet size, bytes (0: negotiate)");
     visit("socket_buffer", socket_buffer, "GigE socket buffer, bytes (0: default)");
     visit("buffer_count", buffer_count, "stream buffers (2-64)");

@@ -31,8 +31,8 @@ const char* MatchVerdictName(MatchVerdict verdict) {
       return "inside two triggers' windows";
     case MatchVerdict::kAnsweredAlready:
       return "for a trigger answered already";
-    case MatchVerdict::kLateTrigger:
-      return "for a trigger that reached the camera late";
+    case MatchVerdict::kLateExposure:
+      return "exposed too long after their frame-set's time";
     case MatchVerdict::kCount:
       break;
   }
@@ -80,8 +80,8 @@ MatchResult ExposureMatcher::Match(const ExposureStamp& frame) {
   }
   Window& window = windows_[*holder];
   window.answered = true;
-  if (window.trigger.acked_utime - window.trigger.sent_utime > options_.max_round_trip_us) {
-    return Count(MatchVerdict::kLateTrigger);
+  if (frame.exposure_utime - window.trigger.utime > options_.max_exposure_delay_us) {
+    return Count(MatchVerdict::kLateExposure);
   }
   return Count(MatchVerdict::kMatched, window.trigger);
 }

@@ -20,8 +20,8 @@
 // counted, when none does (the camera answered outside its latency, or its
 // clock is not synchronised), when two do (triggers too close for this
 // latency), when only answered ones do (a second exposure for one trigger),
-// or when its trigger took longer than `max_round_trip_us` to be
-// acknowledged (it reached the camera too late for its frame-set's time). Frames may arrive in
+// or when it was exposed more than `max_exposure_delay_us` after its
+// frame-set's time (its trigger reached a busy camera late). Frames may arrive in
 // any order and up to `keep_us` late: the windows are kept that long. A trigger whose window passed
 // with no frame is counted unanswered (a missed trigger or a lost frame).
 //
@@ -61,8 +61,8 @@ enum class MatchVerdict {
   kOutsideWindows,    // no trigger's window holds the exposure
   kAmbiguous,         // two triggers' windows hold it
   kAnsweredAlready,   // the one trigger whose window holds it has its frame
-  kLateTrigger,       // its trigger took too long to reach the camera: the image shows a
-                      // later moment than its frame-set's time
+  kLateExposure,      // exposed too long after its frame-set's time (its trigger reached a
+                      // busy camera late): the image shows a later moment
   kCount,
 };
 const char* MatchVerdictName(MatchVerdict verdict);
@@ -80,9 +80,9 @@ struct ExposureMatcherOptions {
   // How far past its receipt an exposure stamp may lie before it is called
   // in the future (PTP's residual error), µs.
   int64_t clock_tolerance_us = 500;
-  // A trigger the camera acknowledged later than this after it was sent
-  // reached the camera too late for its frame-set: its frame is dropped, µs.
-  int64_t max_round_trip_us = 5'000;
+  // A frame exposed later than this after its frame-set's time (the
+  // trigger's `utime`) shows another moment than the set's: dropped, µs.
+  int64_t max_exposure_delay_us = 10'000;
   // Triggers remembered at most (the oldest are forgotten first).
   size_t capacity = 1024;
 };

@@ -34,7 +34,7 @@ constexpr double kTriggerPollHz = 250.0;
 int RenderThreads() {
   return std::max(1, static_cast<int>(std::thread::hardware_concurrency()) - 1);
 }
-constexpr int kRenderNiceness = 10;
+constexpr int kRenderNiceness = 0;
 
 // How often the watcher looks for triggers: the exposure of a camera starts
 // up to this late after its trigger arrived, so the cameras of one trigger

@@ -25,7 +25,7 @@ struct DemoScore {
 class DemoScorer {
  public:
   // Pairs as LiveScorer does: the truth nearest in trigger time, within the tolerance.
-  explicit DemoScorer(int64_t match_tolerance_us = 8000);
+  explicit DemoScorer(int64_t match_tolerance_us = 12'000);  // as LiveScorer's
 
   void AddTruth(const shape_t& truth);
   void AddShape(const shape_t& shape, int64_t receive_utime);

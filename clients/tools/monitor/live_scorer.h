@@ -16,8 +16,11 @@ namespace shapesense {
 // the latency of every stage. Pure bookkeeping: times are passed in.
 class LiveScorer {
  public:
-  // Shapes and truths whose trigger times differ by at most this are a pair, µs.
-  explicit LiveScorer(int64_t match_tolerance_us = 8000) : tolerance_us_(match_tolerance_us) {}
+  // Shapes and truths whose trigger times differ by at most this are a pair,
+  // µs: the virtual rig's truth is at its reference camera's exposure, which
+  // the capture service keeps within 10 ms of its frame-set's time
+  // (max_exposure_delay_us).
+  explicit LiveScorer(int64_t match_tolerance_us = 12'000) : tolerance_us_(match_tolerance_us) {}
 
   void AddTruth(const shape_t& truth);
   // `receive_utime`: when the shape reached the monitor.

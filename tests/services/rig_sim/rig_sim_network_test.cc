@@ -41,6 +41,7 @@ CameraConfig CameraAt(int index, const std::string& pixel_format = "RGB8") {
   // One trigger at a time here: a generous latency keeps a loaded test
   // machine's late watcher from dropping frames these tests look at.
   config.trigger_latency_us = 50'000;
+  config.max_exposure_delay_us = 200'000;
   return config;
 }
 
