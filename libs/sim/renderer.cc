@@ -221,8 +221,8 @@ cv::Rect TubeAndShadowRect(const TubeRaster& raster, const RenderOptions& option
   if (raster.u0 > raster.u1) return {};
   const cv::Rect tube(raster.u0, raster.v0, raster.u1 - raster.u0 + 1, raster.v1 - raster.v0 + 1);
   // The blur's kernel reaches 4 sigma (OpenCV's float kernels), sigma being
-  // half the blur at half resolution: 2 blur px at full resolution, plus a
-  // pixel for the bilinear warp and one for the area resize.
+  // half the blur at half resolution: 2 blur px at full resolution; 4 px
+  // more for the bilinear warp, the area resize and the rounding to even.
   const int margin = static_cast<int>(std::ceil(2.0 * options.shadow_blur_px)) + 4;
   cv::Rect rect(tube.x - margin, tube.y - margin, tube.width + 2 * margin,
                 tube.height + 2 * margin);

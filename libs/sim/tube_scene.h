@@ -126,9 +126,10 @@ class SceneRenderer {
 
   std::vector<RenderedView> Render(const TubeScene& scene, const RenderOptions& options,
                                    uint32_t seed) const;
-  // One camera's image alone, for the virtual rig, several times cheaper:
-  // the tube, its tapes, shading and shadow are Render()'s, pixel for pixel
-  // (identical without noise); the backdrop away from the tube and its
+  // One camera's image alone, for the virtual rig, about three times
+  // cheaper: the tube, its tapes, shading and shadow are Render()'s (without
+  // noise the images agree to one grey level, in a few shadow pixels where
+  // the shadow's warp rounds differently); the backdrop away from the tube and its
   // shadow comes from one of a few pre-rendered noisy backdrops (their noise
   // repeats across images), and no background or truth mask is made.
   // Thread-safe; a pool rebuilds when the backdrop options change.

@@ -1,8 +1,8 @@
 #include "runtime/lcm/frame_set_assembler.h"
 
 #include <algorithm>
-#include <climits>
 #include <cmath>
+#include <limits>
 #include <set>
 #include <stdexcept>
 
@@ -56,6 +56,11 @@ const char* AssemblyOutcomeName(AssemblyOutcome outcome) {
       return "late image";
   }
   return "?";
+}
+
+bool IsRejection(AssemblyOutcome outcome) {
+  return outcome == AssemblyOutcome::kDuplicate || outcome == AssemblyOutcome::kConflicting ||
+         outcome == AssemblyOutcome::kUnknownCamera || outcome == AssemblyOutcome::kLate;
 }
 
 FrameSetAssembler::FrameSetAssembler(std::vector<std::string> cameras,
@@ -172,7 +177,8 @@ bool FrameSetAssembler::Conflicts(const Pending& pending, const image_t& image, 
 }
 
 int64_t FrameSetAssembler::ExposureSpread(const FrameSet& set) {
-  int64_t earliest = INT64_MAX, latest = INT64_MIN;
+  int64_t earliest = std::numeric_limits<int64_t>::max();
+  int64_t latest = std::numeric_limits<int64_t>::min();
   for (const image_t& image : set.images) {
     if (image.device_timestamp_ns <= 0) return 0;
     earliest = std::min(earliest, image.device_timestamp_ns);
@@ -220,10 +226,10 @@ AssemblyResult FrameSetAssembler::Add(image_t image, int64_t now_utime) {
   Retire(*pending);
   const auto it = std::find_if(pending_.begin(), pending_.end(),
                                [&](const Pending& p) { return &p == pending; });
-  if (it->set.trigger_seq >= 0 && ExposureSpread(it->set) > max_spread_us_) {
+  const int64_t spread = it->set.trigger_seq >= 0 ? ExposureSpread(it->set) : 0;
+  if (spread > max_spread_us_) {
     last_drop_ = "frame-set " + std::to_string(it->set.trigger_seq) +
-                 " dropped: its exposures lie " + std::to_string(ExposureSpread(it->set)) +
-                 " us apart";
+                 " dropped: its exposures lie " + std::to_string(spread) + " us apart";
     pending_.erase(it);
     ++counters_.spread;
     return {AssemblyOutcome::kSpread, std::nullopt};

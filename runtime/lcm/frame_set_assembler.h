@@ -73,6 +73,9 @@ enum class AssemblyOutcome {
   kLate,           // its set was completed or dropped already: ignored
 };
 const char* AssemblyOutcomeName(AssemblyOutcome outcome);
+// Whether the image itself was refused (a duplicate, a conflict, an unknown
+// camera, a late image), as opposed to joining, completing or ending a set.
+bool IsRejection(AssemblyOutcome outcome);
 
 struct AssemblyResult {
   AssemblyOutcome outcome = AssemblyOutcome::kPending;

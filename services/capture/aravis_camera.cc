@@ -315,21 +315,24 @@ void AravisCamera::ThrowIfLost() const {
   throw CameraError(Describe("device lost: " + lost_reason_));
 }
 
-// A software trigger's window opens as it leaves and closes the camera's
-// latency after the camera acknowledged it (exposure_matcher.h). Hardware
+// A software trigger's window opens before it leaves and closes the
+// camera's latency after the camera acknowledged it (exposure_matcher.h). Hardware
 // triggers are not sent from here: their frames go out with trigger_seq -1
 // and their exposure stamps, and the carving service groups them by time.
 void AravisCamera::Trigger(int64_t seq, int64_t utime) {
   if (!IsOpen() || lost_ || mode_ != TriggerMode::kSoftware) return;
-  const int64_t sent = HostUtime();
+  {
+    std::lock_guard lock(mutex_);
+    matcher_.Sending(seq, utime, HostUtime());
+  }
   GError* error = nullptr;
   arv_camera_software_trigger(camera_, &error);
   const int64_t acked = HostUtime();
   if (error != nullptr) MarkLost("the software trigger failed: " + TakeMessage(error));
-  std::lock_guard lock(mutex_);
   // A trigger the camera did not acknowledge may still have reached it: its
   // window stays, so that its frame is not taken for another trigger's.
-  matcher_.Sent(SentTrigger{seq, utime, sent, acked});
+  std::lock_guard lock(mutex_);
+  matcher_.Acknowledged(seq, acked);
 }
 
 bool AravisCamera::Grab(std::chrono::milliseconds timeout, CameraFrame* frame) {

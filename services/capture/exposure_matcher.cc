@@ -1,7 +1,12 @@
 #include "services/capture/exposure_matcher.h"
 
+#include <limits>
+
 namespace shapesense {
 namespace {
+
+// The end of a window whose trigger is still on its way to the camera.
+constexpr int64_t kOpen = std::numeric_limits<int64_t>::max() / 2;
 
 // GigE Vision 1.x block ids are 16-bit, skip 0 and wrap: 65535 is followed by 1.
 constexpr int64_t kLastShortId = 0xffff;
@@ -39,6 +44,16 @@ const char* MatchVerdictName(MatchVerdict verdict) {
   return "?";
 }
 
+void ExposureMatcher::Sending(int64_t seq, int64_t utime, int64_t sent_utime) {
+  Sent({seq, utime, sent_utime, kOpen});
+}
+
+void ExposureMatcher::Acknowledged(int64_t seq, int64_t acked_utime) {
+  if (!windows_.empty() && windows_.back().trigger.seq == seq) {
+    windows_.back().trigger.acked_utime = acked_utime;
+  }
+}
+
 void ExposureMatcher::Sent(const SentTrigger& trigger) {
   Expire(trigger.sent_utime);
   windows_.push_back({trigger, false});
@@ -72,15 +87,15 @@ MatchResult ExposureMatcher::Match(const ExposureStamp& frame) {
     return Count(id);
   }
   if (frame.frame_id != 0) last_frame_id_ = frame.frame_id;
-  bool answered_holds = false;
-  const std::optional<size_t> holder = HolderOf(frame.exposure_utime, &answered_holds);
-  if (holder && *holder == kAmbiguous) return Count(MatchVerdict::kAmbiguous);
-  if (!holder) {
-    return Count(answered_holds ? MatchVerdict::kAnsweredAlready : MatchVerdict::kOutsideWindows);
+  const Holders holders = HoldersOf(frame.exposure_utime);
+  if (holders.unanswered > 1) return Count(MatchVerdict::kAmbiguous);
+  if (holders.unanswered == 0) {
+    return Count(holders.answered ? MatchVerdict::kAnsweredAlready : MatchVerdict::kOutsideWindows);
   }
-  Window& window = windows_[*holder];
+  Window& window = windows_[holders.index];
   window.answered = true;
   if (frame.exposure_utime - window.trigger.utime > options_.max_exposure_delay_us) {
+    ++unanswered_;  // its one frame is unusable
     return Count(MatchVerdict::kLateExposure);
   }
   return Count(MatchVerdict::kMatched, window.trigger);
@@ -89,22 +104,21 @@ MatchResult ExposureMatcher::Match(const ExposureStamp& frame) {
 // A window already answered cannot hold this frame: a triggered camera
 // exposes once per trigger (burst of one), and the frame that answered it
 // came earlier.
-std::optional<size_t> ExposureMatcher::HolderOf(int64_t exposure_utime,
-                                                bool* answered_holds) const {
-  std::optional<size_t> holder;
+ExposureMatcher::Holders ExposureMatcher::HoldersOf(int64_t exposure_utime) const {
+  Holders holders;
   for (size_t i = 0; i < windows_.size(); ++i) {
     const SentTrigger& t = windows_[i].trigger;
     if (exposure_utime < t.sent_utime || exposure_utime > t.acked_utime + options_.max_latency_us) {
       continue;
     }
     if (windows_[i].answered) {
-      *answered_holds = true;
-      continue;
+      holders.answered = true;
+    } else {
+      ++holders.unanswered;
+      holders.index = i;
     }
-    if (holder) return kAmbiguous;
-    holder = i;
   }
-  return holder;
+  return holders;
 }
 
 void ExposureMatcher::Expire(int64_t now_utime) {

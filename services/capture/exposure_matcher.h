@@ -21,9 +21,15 @@
 // clock is not synchronised), when two do (triggers too close for this
 // latency), when only answered ones do (a second exposure for one trigger),
 // or when it was exposed more than `max_exposure_delay_us` after its
-// frame-set's time (its trigger reached a busy camera late). Frames may arrive in
-// any order and up to `keep_us` late: the windows are kept that long. A trigger whose window passed
-// with no frame is counted unanswered (a missed trigger or a lost frame).
+// frame-set's time (its trigger reached a busy camera late). Frames may
+// arrive in any order and up to `keep_us` late: the windows are kept that
+// long. A trigger that got no usable frame is counted unanswered (a missed
+// trigger, a lost frame, or one exposed too late).
+//
+// A window is opened before its trigger leaves (Sending) and closed when the
+// camera acknowledges it (Acknowledged): a frame that arrives before the
+// sender has noted the acknowledgement still finds its window. Triggers to
+// one camera go out one at a time, so only the newest window can be open.
 //
 // Sanity checks on the camera's own facts drop a frame whose id repeats the
 // last one's (a duplicate) or goes backwards (other than the GigE Vision
@@ -31,7 +37,6 @@
 // future: a clock that is not the host's).
 
 #include <array>
-#include <cstddef>
 #include <cstdint>
 #include <deque>
 #include <optional>
@@ -91,6 +96,12 @@ class ExposureMatcher {
  public:
   explicit ExposureMatcher(ExposureMatcherOptions options = {}) : options_(options) {}
 
+  // Opens trigger `seq`'s window as it leaves at `sent_utime` (for a frame-set
+  // triggered at `utime`); its end stays open until Acknowledged().
+  void Sending(int64_t seq, int64_t utime, int64_t sent_utime);
+  // Closes the newest window: the camera acknowledged trigger `seq`.
+  void Acknowledged(int64_t seq, int64_t acked_utime);
+  // Sending() and Acknowledged() at once.
   void Sent(const SentTrigger& trigger);
   MatchResult Match(const ExposureStamp& frame);
   // Counts as unanswered the triggers whose window and keep time passed by
@@ -104,7 +115,8 @@ class ExposureMatcher {
   int64_t unanswered() const { return unanswered_; }
   // Frames dropped for any reason.
   int64_t rejected() const;
-  // "3 outside every trigger window, 1 ambiguous", or "" when none.
+  // "3 frames exposed outside every trigger's window, 1 frames inside two
+  // triggers' windows", or "" when none.
   std::string DescribeRejections() const;
 
  private:
@@ -112,12 +124,14 @@ class ExposureMatcher {
     SentTrigger trigger;
     bool answered = false;
   };
+  // The windows holding an exposure.
+  struct Holders {
+    size_t unanswered = 0;  // how many unanswered ones
+    size_t index = 0;       // the last of them
+    bool answered = false;  // whether an answered one does too
+  };
   MatchVerdict CheckFrameId(int64_t frame_id) const;
-  // The index of the one unanswered window holding the exposure,
-  // kAmbiguous when several do, nullopt when none does (`answered_holds`:
-  // whether an answered one does).
-  static constexpr size_t kAmbiguous = SIZE_MAX;
-  std::optional<size_t> HolderOf(int64_t exposure_utime, bool* answered_holds) const;
+  Holders HoldersOf(int64_t exposure_utime) const;
   MatchResult Count(MatchVerdict verdict, std::optional<SentTrigger> trigger = std::nullopt);
 
   ExposureMatcherOptions options_;

@@ -73,8 +73,7 @@ void CarvingService::OnImage(image_t&& image, const std::string& channel, int64_
   CountAssemblyDrops(dropped_before);
   if (result.outcome == AssemblyOutcome::kCompleted) {
     worker_.Push(std::move(*result.completed));
-  } else if (result.outcome != AssemblyOutcome::kPending &&
-             result.outcome != AssemblyOutcome::kSpread) {  // a dropped set, counted as one
+  } else if (IsRejection(result.outcome)) {
     status_.Rejected();
     status_.Note(camera + ": " + AssemblyOutcomeName(result.outcome) + " (trigger " +
                  std::to_string(trigger_seq) + ")");

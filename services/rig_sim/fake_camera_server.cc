@@ -1,7 +1,6 @@
 #include "services/rig_sim/fake_camera_server.h"
 
 #include <arv.h>
-#include <unistd.h>
 
 #include <algorithm>
 #include <cstring>
@@ -27,14 +26,14 @@ constexpr size_t kSerialLimit = 15;  // GigE Vision serial numbers hold 16 bytes
 constexpr double kTriggerPollHz = 250.0;
 // Render threads: all cores but one. A camera's own thread answers its
 // client (GigE Vision control) and sends its images; it hands the rendering
-// to these threads, which run at a lower priority. Rendering in the camera's
-// thread, with every core busy rendering, kept a camera's thread from its
-// next poll long enough for the next trigger to arrive, and it answered both
-// with one image.
+// to these threads. Rendering in the camera's thread, with every core busy
+// rendering, kept a camera's thread from its next poll long enough for the
+// next trigger to arrive, and it answered both with one image. They run at
+// the normal priority: niced, they starved on a loaded machine while the
+// camera's thread waited for them and could not take its next trigger.
 int RenderThreads() {
   return std::max(1, static_cast<int>(std::thread::hardware_concurrency()) - 1);
 }
-constexpr int kRenderNiceness = 0;
 
 // How often the watcher looks for triggers: the exposure of a camera starts
 // up to this late after its trigger arrived, so the cameras of one trigger
@@ -333,8 +332,6 @@ cv::Mat FakeCameraServer::RenderOnWorker(const CameraExposure& exposure) {
 }
 
 void FakeCameraServer::RenderJobs() {
-  const int niceness = nice(kRenderNiceness);  // this thread only (Linux); best effort
-  (void)niceness;
   for (;;) {
     std::unique_lock lock(render_mutex_);
     render_ready_.wait(lock, [this] { return stop_rendering_ || !render_jobs_.empty(); });
@@ -368,7 +365,7 @@ FakeCameraServer::Stamp FakeCameraServer::Fill(int camera, void* data, int width
   Slot& slot = *slots_[static_cast<size_t>(camera)];
   const int64_t now = HostUtime();
   // The exposure began when the watcher saw the trigger (else just now: it
-  // came within the watcher's last millisecond).
+  // came since the watcher's last look, at most kWatchPeriod ago).
   int64_t seen = -1;
   {
     std::lock_guard lock(slot.seen_mutex);

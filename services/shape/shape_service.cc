@@ -129,8 +129,7 @@ void ShapeService::OnImage(image_t&& image, int64_t receive_utime) {
   CountAssemblyDrops(dropped_before);
   if (result.outcome == AssemblyOutcome::kCompleted) {
     OnFrameSet(std::move(*result.completed));
-  } else if (result.outcome != AssemblyOutcome::kPending &&
-             result.outcome != AssemblyOutcome::kSpread) {  // a dropped set, counted as one
+  } else if (IsRejection(result.outcome)) {
     status_.Rejected();
     status_.Note(camera + ": " + AssemblyOutcomeName(result.outcome));
   }

@@ -398,8 +398,12 @@ CaptureDrops ParseCaptureDrops(const std::string& last_error) {
           sum("triggers not sent")};
 }
 
+// The rig's truth is at its reference camera's exposure, which the capture
+// service keeps within 10 ms after its frame-set's time
+// (max_exposure_delay_us): a shape carrying another trigger's time, a period
+// off, finds no truth.
 int64_t PairingToleranceUs(double rate_hz) {
-  return std::min<int64_t>(100'000, static_cast<int64_t>(0.8e6 / rate_hz));
+  return std::min<int64_t>(12'000, static_cast<int64_t>(0.8e6 / rate_hz));
 }
 
 }  // namespace shapesense::e2e

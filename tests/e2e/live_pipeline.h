@@ -187,7 +187,7 @@ std::string BadShapes(const Score& score, double rms_mm);
 // The score and each service's last status, for the test's output.
 std::string Report(const Score& score, const Recorder& recorder);
 
-// The trigger period's share that a truth may trail its shape's trigger by.
+// How long a truth may trail its shape's trigger time, µs (live_pipeline.cc).
 int64_t PairingToleranceUs(double rate_hz);
 
 // What the capture service's last status says its dropped frame-sets were,

@@ -115,12 +115,10 @@ class ReplayPipeline {
       return;
     }
     AssemblyResult result = assembler_.Add(std::move(image), event.timestamp);
-    if (result.outcome == AssemblyOutcome::kCompleted)
+    if (result.outcome == AssemblyOutcome::kCompleted) {
       Process(*result.completed, event.timestamp, summary);
-    if (result.outcome != AssemblyOutcome::kCompleted &&
-        result.outcome != AssemblyOutcome::kPending) {
-      ++summary->rejected;
     }
+    if (IsRejection(result.outcome)) ++summary->rejected;
   }
 
   void Finish(ReplaySummary* summary) {

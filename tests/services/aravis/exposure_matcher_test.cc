@@ -247,6 +247,23 @@ TEST_F(ExposureMatcherCase, DropsAFrameExposedTooLongAfterItsFrameSetsTime) {
   matcher_.Sent({4, 1'050'000, 1'060'000, 1'060'200});
   EXPECT_EQ(matcher_.Match({21, 1'060'000, 1'070'000}).trigger->seq, 4) << "10 ms after: kept";
   EXPECT_EQ(matcher_.count(MatchVerdict::kLateExposure), 1);
+  EXPECT_EQ(matcher_.unanswered(), 1) << "its trigger got no usable frame";
+}
+
+// The sender may be held up between the camera's acknowledgement and its
+// note of it: a frame arriving meanwhile still finds its trigger's window,
+// which is open from the moment the trigger left.
+TEST_F(ExposureMatcherCase, AFrameBeforeTheAcknowledgementIsNotedFindsItsOpenWindow) {
+  matcher_.Sending(3, 1'040'000, 1'040'100);
+  EXPECT_EQ(matcher_.Match({20, 1'040'400, 1'045'000}).trigger->seq, 3);
+  matcher_.Acknowledged(3, 1'040'300);
+  matcher_.Sending(4, 1'050'000, 1'050'100);
+  EXPECT_EQ(matcher_.Match({21, 1'050'000, 1'055'000}).verdict, MatchVerdict::kOutsideWindows)
+      << "exposed before its trigger left";
+  matcher_.Acknowledged(4, 1'050'300);
+  EXPECT_EQ(matcher_.Match({22, 1'050'300 + 4'001, 1'060'000}).verdict,
+            MatchVerdict::kOutsideWindows)
+      << "once acknowledged, the window closes the latency later";
 }
 
 TEST_F(ExposureMatcherCase, CountsUnansweredTriggersOnceTheirWindowsPassed) {
