@@ -15,6 +15,9 @@ inline constexpr const char* kImagePattern = "SHAPESENSE_IMAGE_.*";
 inline std::string Silhouette(const std::string& camera) {
   return "SHAPESENSE_SILHOUETTE_" + camera;
 }
+// The silhouettes of each frame-set, compact (what the shape service refines
+// against): silhouettes_t, one datagram.
+inline constexpr const char* kSilhouettes = "SHAPESENSE_SILHOUETTES";
 // The visual hull of each frame-set: voxel_cloud_t.
 inline constexpr const char* kVoxels = "SHAPESENSE_VOXELS";
 // The measured shape: shape_t.

@@ -9,6 +9,7 @@
 #include "runtime/file_io.h"
 #include "runtime/lcm/lcm_bus.h"
 #include "runtime/lcm/message_convert.h"
+#include "runtime/lcm/silhouette_message.h"
 
 namespace shapesense {
 namespace fs = std::filesystem;
@@ -43,13 +44,21 @@ std::optional<ConfigurationSetup> CheckedConfiguration(std::optional<Configurati
   return setup;
 }
 
-// Extracts every camera's silhouette of decoded images.
-void ExtractAll(const SilhouetteExtractor& extractor, const std::vector<cv::Mat>& images,
-                const std::vector<cv::Mat>& backgrounds, std::vector<Silhouette>* silhouettes) {
-  silhouettes->resize(images.size());
-  for (size_t i = 0; i < images.size(); ++i) {
-    extractor.Extract(images[i], backgrounds[i], &(*silhouettes)[i]);
+// Extracts and compacts every camera's silhouette of decoded images.
+void ExtractAll(const SilhouetteExtractor& extractor, const std::vector<cv::Mat>& backgrounds,
+                CarvingOutput* out) {
+  const size_t n = out->images.size();
+  out->silhouettes.resize(n);
+  out->compact.resize(n);
+  for (size_t i = 0; i < n; ++i) {
+    extractor.Extract(out->images[i], backgrounds[i], &out->silhouettes[i]);
+    Compact(out->silhouettes[i], &out->compact[i], &out->compact_scratch);
   }
+}
+
+bool SameFrameSet(const voxel_cloud_t& voxels, const silhouettes_t& silhouettes) {
+  return voxels.trigger_seq == silhouettes.trigger_seq &&
+         voxels.trigger_utime == silhouettes.trigger_utime;
 }
 
 }  // namespace
@@ -122,7 +131,7 @@ CarvingStage::CarvingStage(const Rig& rig, std::vector<cv::Mat> backgrounds,
 std::string CarvingStage::Process(const FrameSet& set, CarvingOutput* out) const {
   auto start = Clock::now();
   if (std::string error = DecodeFrameSet(set, rig_, &out->images); !error.empty()) return error;
-  ExtractAll(extractor_, out->images, backgrounds_, &out->silhouettes);
+  ExtractAll(extractor_, backgrounds_, out);
   const int64_t silhouette_us = MicrosecondsSince(start);
   const int64_t silhouette_end = NowUtime();
 
@@ -137,24 +146,29 @@ std::string CarvingStage::Process(const FrameSet& set, CarvingOutput* out) const
   out->message.stage_times.push_back(MakeStageTime("silhouette", silhouette_us, silhouette_end));
   out->message.stage_times.push_back(MakeStageTime("carving", carving_us, NowUtime()));
   out->message.num_stage_times = static_cast<int32_t>(out->message.stage_times.size());
+
+  SilhouettesToMessage(rig_, out->compact, &out->silhouettes_message);
+  out->silhouettes_message.trigger_seq = set.trigger_seq;
+  out->silhouettes_message.trigger_utime = set.trigger_utime;
   return {};
 }
 
-ShapeStage::ShapeStage(const Rig& rig, std::vector<cv::Mat> backgrounds,
-                       const SilhouetteOptions& silhouette, const ShapeOptions& shape,
+ShapeStage::ShapeStage(const Rig& rig, const ShapeOptions& shape,
                        std::optional<ConfigurationSetup> configuration)
     : rig_(rig),
-      backgrounds_(std::move(backgrounds)),
-      wants_images_(shape.refine_with_silhouettes),
-      extractor_(silhouette),
+      wants_silhouettes_(shape.refine_with_silhouettes),
       estimator_(rig, shape),
-      configuration_(CheckedConfiguration(std::move(configuration))) {
-  if (wants_images_) CheckBackgrounds(rig_, backgrounds_);
-}
+      configuration_(CheckedConfiguration(std::move(configuration))) {}
 
-std::string ShapeStage::ExtractSilhouettes(const FrameSet& set, ShapeOutput* out) const {
-  if (std::string error = DecodeFrameSet(set, rig_, &out->images); !error.empty()) return error;
-  ExtractAll(extractor_, out->images, backgrounds_, &out->silhouettes);
+std::string ShapeStage::ExpandSilhouettes(const voxel_cloud_t& voxels, const silhouettes_t* message,
+                                          ShapeOutput* out) const {
+  if (message == nullptr) return "none";
+  if (!SameFrameSet(voxels, *message)) return "of another frame-set";
+  if (std::string error = SilhouettesFromMessage(*message, rig_, &out->compact); !error.empty()) {
+    return error;
+  }
+  out->silhouettes.resize(out->compact.size());
+  for (size_t k = 0; k < out->compact.size(); ++k) Expand(out->compact[k], &out->silhouettes[k]);
   return {};
 }
 
@@ -171,16 +185,15 @@ void ShapeStage::SenseConfigurationOf(ShapeOutput* out) const {
                          configuration_->geometry, configuration_->options);
 }
 
-std::string ShapeStage::Process(const voxel_cloud_t& voxels, const FrameSet* images,
+std::string ShapeStage::Process(const voxel_cloud_t& voxels, const silhouettes_t* silhouettes,
                                 ShapeOutput* out) const {
   if (std::string error = VoxelCloudFromMessage(voxels, &out->cloud); !error.empty()) return error;
   const auto start = Clock::now();
   out->warning.clear();
   out->silhouettes.clear();
-  if (wants_images_ && images == nullptr) out->warning = "no images; shape not refined";
-  if (wants_images_ && images != nullptr) {
-    if (std::string error = ExtractSilhouettes(*images, out); !error.empty()) {
-      out->warning = error + "; shape not refined";
+  if (wants_silhouettes_) {
+    if (const std::string error = ExpandSilhouettes(voxels, silhouettes, out); !error.empty()) {
+      out->warning = "silhouettes: " + error + "; shape not refined";
       out->silhouettes.clear();
     }
   }

@@ -1,9 +1,10 @@
 #pragma once
 
-// The sensing chain cut at the LCM channels: frame-set → voxel cloud
-// (CarvingStage, in the carving service) and voxel cloud + frame-set → shape
-// (ShapeStage, in the shape service). `shapesense replay` runs the same two
-// stages on a recorded log, so replay reproduces the live shapes exactly.
+// The sensing chain cut at the LCM channels: frame-set → voxel cloud and
+// compact silhouettes (CarvingStage, in the carving service), and voxel
+// cloud + compact silhouettes → shape (ShapeStage, in the shape service).
+// `shapesense replay` runs the same two stages on a recorded log, so replay
+// reproduces the live shapes exactly.
 #include <filesystem>
 #include <opencv2/core.hpp>
 #include <optional>
@@ -14,10 +15,12 @@
 #include "libs/carving/carver.h"
 #include "libs/centerline/shape_estimator.h"
 #include "libs/mechanics/configuration_sensing.h"
+#include "libs/silhouette/compact_silhouette.h"
 #include "libs/silhouette/silhouette.h"
 #include "runtime/config_file.h"
 #include "runtime/lcm/frame_set_assembler.h"
 #include "shapesense/shape_t.hpp"
+#include "shapesense/silhouettes_t.hpp"
 #include "shapesense/voxel_cloud_t.hpp"
 
 namespace shapesense {
@@ -49,13 +52,18 @@ std::vector<stage_time_t> FrameSetStageTimes(const FrameSet& set);
 // What CarvingStage produces; kept between frame-sets so buffers are reused.
 struct CarvingOutput {
   voxel_cloud_t message;  // trigger, grid, voxels, stage times; the header is the publisher's
+  // The silhouettes compacted for the shape stage: trigger and views; the
+  // header is the publisher's.
+  silhouettes_t silhouettes_message;
   std::vector<Silhouette> silhouettes;
+  std::vector<CompactSilhouette> compact;
+  CompactScratch compact_scratch;
   std::vector<cv::Mat> images;
   VoxelCloud cloud;
 };
 
-// Decode, silhouettes ("silhouette": decoding and extraction of every
-// camera), hierarchical carving ("carving").
+// Decode, silhouettes ("silhouette": decoding, extraction and compaction of
+// every camera), hierarchical carving ("carving").
 class CarvingStage {
  public:
   // Builds the carver's lookup table (about 1 s at 256³ voxels). Throws
@@ -92,45 +100,44 @@ struct ShapeOutput {
   // configuration_residual_mm) or why not (reason); else invalid, no reason.
   ConfigurationMeasurement configuration;
   // Set when the shape was measured without the silhouettes it should have
-  // had (the frame-set was missing or did not decode): the reason.
+  // had (they were missing or malformed): the reason.
   std::string warning;
-  std::vector<Silhouette> silhouettes;
-  std::vector<cv::Mat> images;
+  std::vector<CompactSilhouette> compact;
+  std::vector<Silhouette> silhouettes;  // expanded from `compact`
   VoxelCloud cloud;
 };
 
-// Voxel cloud → shape, refined against the silhouettes of the frame-set the
-// cloud was carved from, extracted again here, and with a `configuration`
-// setup the configuration q of the shape ("shape": extraction, estimation
-// and q).
+// Voxel cloud → shape, refined against the compact silhouettes the carving
+// stage made of the same frame-set, and with a `configuration` setup the
+// configuration q of the shape ("shape": expansion, estimation and q).
 class ShapeStage {
  public:
-  // `backgrounds` may be empty when shape.refine_with_silhouettes is off.
-  // Throws InputError on backgrounds that do not fit the rig,
-  // std::invalid_argument on options or a geometry that fail validation.
-  ShapeStage(const Rig& rig, std::vector<cv::Mat> backgrounds, const SilhouetteOptions& silhouette,
-             const ShapeOptions& shape, std::optional<ConfigurationSetup> configuration = {});
+  // Throws std::invalid_argument on options or a geometry that fail validation.
+  ShapeStage(const Rig& rig, const ShapeOptions& shape,
+             std::optional<ConfigurationSetup> configuration = {});
 
-  // Whether Process wants the frame-set (refinement is on).
-  bool wants_images() const { return wants_images_; }
+  // Whether Process wants the silhouettes (refinement is on).
+  bool wants_silhouettes() const { return wants_silhouettes_; }
   // Whether Process senses q.
   bool senses_configuration() const { return configuration_.has_value(); }
 
-  // `images`: the frame-set of the cloud, or nullptr. "" when a shape was
-  // produced (valid or not: an estimate that fails carries its error in the
-  // message); else why the cloud itself is malformed, and nothing to publish.
-  std::string Process(const voxel_cloud_t& voxels, const FrameSet* images, ShapeOutput* out) const;
+  // `silhouettes`: those of the cloud's frame-set, or nullptr. "" when a
+  // shape was produced (valid or not: an estimate that fails carries its
+  // error in the message); else why the cloud itself is malformed, and
+  // nothing to publish.
+  std::string Process(const voxel_cloud_t& voxels, const silhouettes_t* silhouettes,
+                      ShapeOutput* out) const;
 
  private:
-  // Fills out->silhouettes from the set; "" or why they could not be had.
-  std::string ExtractSilhouettes(const FrameSet& set, ShapeOutput* out) const;
+  // Fills out->silhouettes from the message, when it is there and of the
+  // cloud's frame-set; "" or why they could not be had.
+  std::string ExpandSilhouettes(const voxel_cloud_t& voxels, const silhouettes_t* message,
+                                ShapeOutput* out) const;
   // out->configuration from out->estimate.
   void SenseConfigurationOf(ShapeOutput* out) const;
 
   Rig rig_;
-  std::vector<cv::Mat> backgrounds_;
-  bool wants_images_;
-  SilhouetteExtractor extractor_;
+  bool wants_silhouettes_;
   ShapeEstimator estimator_;
   std::optional<ConfigurationSetup> configuration_;
 };

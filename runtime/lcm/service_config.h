@@ -24,15 +24,17 @@ struct ServiceOverrides {
 YAML::Node ReadServiceConfig(const std::filesystem::path& config,
                              const ServiceOverrides& overrides);
 
-// Options with `rig`, `backgrounds` and `lcm_url` keys, read and validated
-// (InputError naming the file and key), their paths resolved against the
-// config file's folder.
+// Options with `rig` and `lcm_url` keys, and maybe `backgrounds`, read and
+// validated (InputError naming the file and key), their paths resolved
+// against the config file's folder.
 template <class Options>
 Options LoadServiceOptions(const std::filesystem::path& config, const ServiceOverrides& overrides) {
   const std::string source = config.empty() ? "(command line)" : config.string();
   Options options = OptionsFromYaml<Options>(ReadServiceConfig(config, overrides), source);
   options.rig = ResolveConfigPath(config, options.rig).string();
-  options.backgrounds = ResolveConfigPath(config, options.backgrounds).string();
+  if constexpr (requires { options.backgrounds; }) {
+    options.backgrounds = ResolveConfigPath(config, options.backgrounds).string();
+  }
   return options;
 }
 

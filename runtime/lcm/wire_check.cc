@@ -55,6 +55,11 @@ class WireWalker {
     }
     return true;
   }
+  // Three parallel int16 arrays of runs (row, begin, end).
+  bool Runs() {
+    int64_t count = 0;
+    return Count(&count) && SkipArray(count, 3 * 2);
+  }
   bool AtEnd() const { return pos_ == size_; }
 
  private:
@@ -84,6 +89,21 @@ bool WireCheck<voxel_cloud_t>::Plausible(const uint8_t* data, size_t size) {
   int64_t voxels = 0;
   return walk.Skip(kHash + kHeader + kVoxelFixed) && walk.Count(&voxels) &&
          walk.SkipArray(voxels, 4 + 1) && walk.StageTimes() && walk.AtEnd();
+}
+
+bool WireCheck<silhouettes_t>::Plausible(const uint8_t* data, size_t size) {
+  WireWalker walk(data, size);
+  int64_t views = 0;
+  if (!walk.Skip(kHash + kHeader + 8 + 8) || !walk.Count(&views)) return false;
+  for (int64_t k = 0; k < views; ++k) {
+    int64_t values = 0;
+    // camera, width, height, the mask's, the tape's and the band's runs, the band's values
+    if (!walk.SkipString() || !walk.Skip(4 + 4) || !walk.Runs() || !walk.Runs() || !walk.Runs() ||
+        !walk.Count(&values) || !walk.SkipArray(values, 1)) {
+      return false;
+    }
+  }
+  return walk.AtEnd();
 }
 
 bool WireCheck<shape_t>::Plausible(const uint8_t* data, size_t size) {

@@ -16,6 +16,7 @@
 
 #include "shapesense/image_t.hpp"
 #include "shapesense/shape_t.hpp"
+#include "shapesense/silhouettes_t.hpp"
 #include "shapesense/tendon_command_t.hpp"
 #include "shapesense/tendon_state_t.hpp"
 #include "shapesense/voxel_cloud_t.hpp"
@@ -37,6 +38,10 @@ struct WireCheck<image_t> {
 };
 template <>
 struct WireCheck<voxel_cloud_t> {
+  static bool Plausible(const uint8_t* data, size_t size);
+};
+template <>
+struct WireCheck<silhouettes_t> {
   static bool Plausible(const uint8_t* data, size_t size);
 };
 template <>

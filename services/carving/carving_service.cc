@@ -105,6 +105,13 @@ void CarvingService::CarveAndPublish(const FrameSet& set) {
     status_.Error(FrameSetName(set) + ": " + error);
     return;
   }
+  // The silhouettes first: the shape service then usually has them when the
+  // cloud arrives, and measures at once.
+  output_.silhouettes_message.header.seq = voxels_seq_;
+  output_.silhouettes_message.header.utime = NowUtime();
+  if (!bus_.Publish(channels::kSilhouettes, output_.silhouettes_message)) {
+    status_.Error("could not publish on " + std::string(channels::kSilhouettes));
+  }
   output_.message.header.seq = voxels_seq_++;
   output_.message.header.utime = NowUtime();
   if (!bus_.Publish(channels::kVoxels, output_.message)) {

@@ -11,17 +11,32 @@
 #include "runtime/lcm/message_convert.h"
 #include "runtime/lcm/service_config.h"
 #include "runtime/lcm/service_loop.h"
+#include "runtime/lcm/silhouette_message.h"
 
 namespace shapesense {
 namespace {
 
-FrameSetKey KeyOfVoxels(const voxel_cloud_t& voxels) {
-  return {voxels.trigger_seq >= 0 ? voxels.trigger_seq : -1, voxels.trigger_utime};
+// The frame-set a voxel cloud or silhouettes message comes from.
+template <class Message>
+FrameSetKey FrameSetOf(const Message& message) {
+  return {message.trigger_seq >= 0 ? message.trigger_seq : -1, message.trigger_utime};
 }
 
-std::string NameOf(const voxel_cloud_t& voxels) {
-  return voxels.trigger_seq >= 0 ? "frame-set " + std::to_string(voxels.trigger_seq)
-                                 : "frame-set at " + std::to_string(voxels.trigger_utime) + " us";
+// Takes the waiting message of `key` out of `waiting`, if there is one.
+template <class Message>
+std::optional<Message> TakeWaiting(std::deque<Message>& waiting, const FrameSetKey& key) {
+  const auto found = std::find_if(waiting.begin(), waiting.end(),
+                                  [&](const Message& w) { return FrameSetOf(w.message) == key; });
+  if (found == waiting.end()) return std::nullopt;
+  std::optional<Message> taken(std::move(*found));
+  waiting.erase(found);
+  return taken;
+}
+
+template <class Message>
+std::string NameOf(const Message& message) {
+  return message.trigger_seq >= 0 ? "frame-set " + std::to_string(message.trigger_seq)
+                                  : "frame-set at " + std::to_string(message.trigger_utime) + " us";
 }
 
 std::optional<ConfigurationSetup> MatchingConfiguration(
@@ -73,19 +88,15 @@ std::optional<ConfigurationSetup> LoadConfigurationSetup(const ShapeServiceOptio
 
 std::string ShapeServiceOptions::Validate() const {
   if (rig.empty()) return "rig: expected the rig file, got nothing";
-  if (shape.refine_with_silhouettes && backgrounds.empty()) {
-    return "backgrounds: expected the folder of backgrounds (needed by "
-           "shape.refine_with_silhouettes), "
-           "got nothing";
-  }
-  for (const auto& [section, error] :
-       {std::pair{"silhouette.", silhouette.Validate()}, std::pair{"shape.", shape.Validate()},
-        std::pair{"assembly.", assembly.Validate()},
-        std::pair{"configuration.", configuration.Validate()}}) {
+  for (const auto& [section, error] : {std::pair{"shape.", shape.Validate()},
+                                       std::pair{"configuration.", configuration.Validate()}}) {
     if (!error.empty()) return section + error;
   }
   if (!(pairing_timeout_ms >= 1 && pairing_timeout_ms <= 60000)) {
     return "pairing_timeout_ms: expected 1-60000, got " + std::to_string(pairing_timeout_ms);
+  }
+  if (max_waiting < 1 || max_waiting > 1000) {
+    return "max_waiting: expected 1-1000, got " + std::to_string(max_waiting);
   }
   if (queue_capacity < 1 || queue_capacity > 100) {
     return "queue_capacity: expected 1-100, got " + std::to_string(queue_capacity);
@@ -93,14 +104,13 @@ std::string ShapeServiceOptions::Validate() const {
   return {};
 }
 
-ShapeService::ShapeService(const ShapeServiceOptions& options, RigSetup setup, LcmBus& bus,
+ShapeService::ShapeService(const ShapeServiceOptions& options, const Rig& rig, LcmBus& bus,
                            std::optional<ConfigurationSetup> configuration)
     : options_(options),
       bus_(bus),
-      stage_(setup.rig, std::move(setup.backgrounds), options.silhouette, options.shape,
-             MatchingConfiguration(options, std::move(configuration))),
+      rig_(rig),
+      stage_(rig, options.shape, MatchingConfiguration(options, std::move(configuration))),
       pairing_timeout_us_(static_cast<int64_t>(std::llround(options.pairing_timeout_ms * 1e3))),
-      assembler_(CameraNames(setup.rig), options.assembly),
       worker_(
           options.queue_capacity, status_, "voxel cloud",
           [](const Job& job) { return NameOf(job.voxels); },
@@ -109,93 +119,71 @@ ShapeService::ShapeService(const ShapeServiceOptions& options, RigSetup setup, L
       channels::kVoxels, [this](voxel_cloud_t&& voxels, const std::string&, int64_t receive_utime) {
         OnVoxels(std::move(voxels), receive_utime);
       });
-  if (stage_.wants_images()) {
-    bus_.Subscribe<image_t>(channels::kImagePattern,
-                            [this](image_t&& image, const std::string&, int64_t receive_utime) {
-                              OnImage(std::move(image), receive_utime);
-                            });
+  if (stage_.wants_silhouettes()) {
+    bus_.Subscribe<silhouettes_t>(
+        channels::kSilhouettes,
+        [this](silhouettes_t&& silhouettes, const std::string&, int64_t receive_utime) {
+          OnSilhouettes(std::move(silhouettes), receive_utime);
+        });
   }
 }
 
-void ShapeService::OnImage(image_t&& image, int64_t receive_utime) {
-  if (const std::string error = ValidateImageMessage(image); !error.empty()) {
+void ShapeService::OnSilhouettes(silhouettes_t&& silhouettes, int64_t receive_utime) {
+  // Checked here (tens of µs) so that malformed silhouettes are counted, not
+  // kept waiting for a cloud or silently forgotten.
+  if (const std::string error = SilhouettesFromMessage(silhouettes, rig_, &checked_);
+      !error.empty()) {
     status_.Rejected();
-    status_.Note(error);
+    status_.Note("silhouettes of " + NameOf(silhouettes) + ": " + error);
     return;
   }
-  const std::string camera = image.camera;
-  const int64_t dropped_before = assembler_.counters().DroppedSets();
-  AssemblyResult result = assembler_.Add(std::move(image), receive_utime);
-  CountAssemblyDrops(dropped_before);
-  if (result.outcome == AssemblyOutcome::kCompleted) {
-    OnFrameSet(std::move(*result.completed));
-  } else if (IsRejection(result.outcome)) {
-    status_.Rejected();
-    status_.Note(camera + ": " + AssemblyOutcomeName(result.outcome));
-  }
-}
-
-void ShapeService::CountAssemblyDrops(int64_t before) {
-  if (assembler_.counters().DroppedSets() > before) status_.Note(assembler_.last_drop());
-}
-
-void ShapeService::OnFrameSet(FrameSet set) {
-  const FrameSetKey key = KeyOf(set);
-  const auto voxels =
-      std::find_if(waiting_voxels_.begin(), waiting_voxels_.end(),
-                   [&](const WaitingVoxels& w) { return KeyOfVoxels(w.voxels) == key; });
-  if (voxels != waiting_voxels_.end()) {
-    worker_.Push({std::move(voxels->voxels), std::move(set)});
-    waiting_voxels_.erase(voxels);
+  std::optional<Waiting<voxel_cloud_t>> voxels =
+      TakeWaiting(waiting_voxels_, FrameSetOf(silhouettes));
+  if (voxels) {
+    worker_.Push({std::move(voxels->message), std::move(silhouettes)});
     return;
   }
-  // Usually the images come first: the carving service is still at work on them.
-  const int64_t complete = set.complete_utime;
-  waiting_images_.push_back({std::move(set), complete});
-  while (waiting_images_.size() > 2 * static_cast<size_t>(options_.assembly.max_pending)) {
-    waiting_images_.pop_front();
+  // Usually the silhouettes come first: the carving service sends them first.
+  waiting_silhouettes_.push_back({std::move(silhouettes), receive_utime});
+  while (waiting_silhouettes_.size() > static_cast<size_t>(options_.max_waiting)) {
+    waiting_silhouettes_.pop_front();
   }
 }
 
 void ShapeService::OnVoxels(voxel_cloud_t&& voxels, int64_t receive_utime) {
   status_.Received();
   // A full check is cheap (a few µs for a tube's thousands of voxels) and
-  // keeps a malformed cloud from waiting for images it will never use.
+  // keeps a malformed cloud from waiting for silhouettes it will never use.
   if (const std::string error = ValidateVoxelCloudMessage(voxels); !error.empty()) {
     status_.Rejected();
     status_.Note(NameOf(voxels) + ": " + error);
     return;
   }
-  if (!stage_.wants_images()) {
+  if (!stage_.wants_silhouettes()) {
     worker_.Push({std::move(voxels), std::nullopt});
     return;
   }
-  const FrameSetKey key = KeyOfVoxels(voxels);
-  const auto images = std::find_if(waiting_images_.begin(), waiting_images_.end(),
-                                   [&](const WaitingImages& w) { return KeyOf(w.set) == key; });
-  if (images != waiting_images_.end()) {
-    worker_.Push({std::move(voxels), std::move(images->set)});
-    waiting_images_.erase(images);
+  std::optional<Waiting<silhouettes_t>> silhouettes =
+      TakeWaiting(waiting_silhouettes_, FrameSetOf(voxels));
+  if (silhouettes) {
+    worker_.Push({std::move(voxels), std::move(silhouettes->message)});
     return;
   }
   waiting_voxels_.push_back({std::move(voxels), receive_utime});
-  if (waiting_voxels_.size() > static_cast<size_t>(options_.assembly.max_pending)) {
-    worker_.Push({std::move(waiting_voxels_.front().voxels), std::nullopt});
+  if (waiting_voxels_.size() > static_cast<size_t>(options_.max_waiting)) {
+    worker_.Push({std::move(waiting_voxels_.front().message), std::nullopt});
     waiting_voxels_.pop_front();
   }
 }
 
 void ShapeService::Poll(int64_t now_utime) {
-  const int64_t dropped_before = assembler_.counters().DroppedSets();
-  assembler_.Expire(now_utime);
-  CountAssemblyDrops(dropped_before);
   while (!waiting_voxels_.empty() &&
          now_utime - waiting_voxels_.front().receive_utime > pairing_timeout_us_) {
-    worker_.Push({std::move(waiting_voxels_.front().voxels), std::nullopt});
+    worker_.Push({std::move(waiting_voxels_.front().message), std::nullopt});
     waiting_voxels_.pop_front();
   }
-  std::erase_if(waiting_images_, [&](const WaitingImages& w) {
-    return now_utime - w.complete_utime > pairing_timeout_us_;
+  std::erase_if(waiting_silhouettes_, [&](const Waiting<silhouettes_t>& w) {
+    return now_utime - w.receive_utime > pairing_timeout_us_;
   });
   status_.SetQueueDepth(worker_.depth());
   status_.MaybePublish(bus_, now_utime);
@@ -206,8 +194,8 @@ service_status_t ShapeService::Status(int64_t now_utime) {
 }
 
 void ShapeService::MeasureAndPublish(const Job& job) {
-  const FrameSet* images = job.images ? &*job.images : nullptr;
-  if (const std::string error = stage_.Process(job.voxels, images, &output_); !error.empty()) {
+  const silhouettes_t* silhouettes = job.silhouettes ? &*job.silhouettes : nullptr;
+  if (const std::string error = stage_.Process(job.voxels, silhouettes, &output_); !error.empty()) {
     status_.Rejected();
     status_.Note(NameOf(job.voxels) + ": " + error);
     return;
@@ -228,8 +216,13 @@ void ShapeService::MeasureAndPublish(const Job& job) {
 }
 
 ShapeServiceOptions LoadShapeServiceOptions(const ServiceArgs& args) {
-  ShapeServiceOptions options = LoadServiceOptions<ShapeServiceOptions>(
-      args.config, {args.rig, args.backgrounds, args.lcm_url});
+  if (!args.backgrounds.empty()) {
+    throw InputError(
+        "--backgrounds: the shape service uses none (the carving service sends it the "
+        "silhouettes)");
+  }
+  ShapeServiceOptions options =
+      LoadServiceOptions<ShapeServiceOptions>(args.config, {args.rig, {}, args.lcm_url});
   options.configuration.manipulator =
       ResolveConfigPath(args.config, options.configuration.manipulator).string();
   return options;
@@ -238,11 +231,10 @@ ShapeServiceOptions LoadShapeServiceOptions(const ServiceArgs& args) {
 service_status_t RunShapeService(const ServiceArgs& args, const std::atomic<bool>& stop,
                                  std::ostream& log) {
   const ShapeServiceOptions options = LoadShapeServiceOptions(args);
-  const std::string backgrounds = options.shape.refine_with_silhouettes ? options.backgrounds : "";
-  RigSetup setup = LoadRigSetup(options.rig, backgrounds);
+  const RigSetup setup = LoadRigSetup(options.rig, {});
   std::optional<ConfigurationSetup> configuration = LoadConfigurationSetup(options);
   LcmBus bus(options.lcm_url);
-  ShapeService service(options, std::move(setup), bus, std::move(configuration));
+  ShapeService service(options, setup.rig, bus, std::move(configuration));
   log << "shapesense-shape: running on "
       << (options.lcm_url.empty() ? "LCM's default" : options.lcm_url)
       << (options.shape.refine_with_silhouettes ? ", refining against the silhouettes" : "")

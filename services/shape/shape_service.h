@@ -1,15 +1,13 @@
 #pragma once
 
-// shapesense-shape: voxel cloud (+ the frame-set's images) → shape, over LCM.
+// shapesense-shape: voxel cloud + compact silhouettes → shape, over LCM.
 //
-// The shape is refined against the silhouettes' sub-pixel edges, so this
-// service needs the images too. It subscribes to the cameras as the carving
-// service does, assembles the same frame-sets (FrameSetAssembler) and
-// extracts their silhouettes again (about 0.1 ms per 640×480 image), then
-// pairs each voxel cloud with its frame-set by trigger sequence and time.
-// The alternative, the carving service sending edge data, would save that
-// work but tie the two services to one more message format; the images are
-// multicast to every subscriber anyway, so the network carries them once.
+// The shape is refined against the silhouettes' sub-pixel edges. The carving
+// service sends them compacted (silhouettes_t: the mask and tape as runs, the
+// difference image only along the outline; tens of kB, one datagram), so
+// this service receives no image: it needs no backgrounds, extracts nothing
+// again, and can run on another host than the cameras. It pairs each voxel
+// cloud with its silhouettes by trigger sequence and time.
 #include <array>
 #include <atomic>
 #include <deque>
@@ -19,8 +17,6 @@
 
 #include "libs/centerline/shape_estimator.h"
 #include "libs/mechanics/configuration_sensing.h"
-#include "libs/silhouette/silhouette.h"
-#include "runtime/lcm/frame_set_assembler.h"
 #include "runtime/lcm/lcm_bus.h"
 #include "runtime/lcm/pipeline_stages.h"
 #include "runtime/lcm/service_main.h"
@@ -65,18 +61,15 @@ struct ShapeConfigurationOptions {
 
 // config/shape_service.yaml documents every key.
 struct ShapeServiceOptions {
-  // Rig file and the folder of backgrounds (<camera>.png); relative paths are
-  // relative to the config file's folder. Backgrounds are needed only for
-  // the refinement against the silhouettes (shape.refine_with_silhouettes).
+  // Rig file, relative to the config file's folder.
   std::string rig;
-  std::string backgrounds;
-  // For the refinement; keep it equal to the carving service's.
-  SilhouetteOptions silhouette;
   ShapeOptions shape;
-  FrameSetAssemblyOptions assembly;
-  // How long a voxel cloud waits for its frame-set before it is measured
-  // without refinement, and a frame-set for its voxel cloud, ms.
+  // How long a voxel cloud waits for its silhouettes before it is measured
+  // without refinement, and silhouettes for their voxel cloud, ms.
   double pairing_timeout_ms = 500.0;
+  // Voxel clouds, and silhouettes, waiting for their partner at once; past
+  // it the oldest cloud is measured unrefined, the oldest silhouettes forgotten.
+  int max_waiting = 8;
   // Voxel clouds waiting for the worker; on overload the oldest is dropped.
   int queue_capacity = 2;
   std::string lcm_url;
@@ -85,14 +78,12 @@ struct ShapeServiceOptions {
   template <class Visitor>
   void VisitFields(Visitor&& visit) {
     visit("rig", rig, "rig file (OpenCV YAML), relative to this file");
-    visit("backgrounds", backgrounds,
-          "folder of <camera>.png backgrounds, relative to this file (for the refinement)");
-    visit("silhouette", silhouette,
-          "silhouette extraction for the refinement (as the carving service's)");
     visit("shape", shape, "centreline and markers");
-    visit("assembly", assembly, "frame-set assembly");
     visit("pairing_timeout_ms", pairing_timeout_ms,
-          "wait of a voxel cloud for its images and of images for their cloud, ms (1-60000)");
+          "wait of a voxel cloud for its silhouettes and of silhouettes for their cloud, ms "
+          "(1-60000)");
+    visit("max_waiting", max_waiting,
+          "voxel clouds, and silhouettes, waiting for their partner at once (1-1000)");
     visit("queue_capacity", queue_capacity, "voxel clouds waiting for the worker (1-100)");
     visit("lcm_url", lcm_url, "LCM provider URL (empty: LCM_DEFAULT_URL or LCM's default)");
     visit("configuration", configuration,
@@ -114,50 +105,45 @@ std::optional<ConfigurationSetup> LoadConfigurationSetup(const ShapeServiceOptio
 // be handled once the service is gone.
 class ShapeService {
  public:
-  // Subscribes to the voxels (and, when refining, the cameras) and starts
-  // the worker. `configuration`: LoadConfigurationSetup(options). Throws
-  // InputError on backgrounds that do not fit the rig,
-  // std::invalid_argument when `configuration` and
+  // Subscribes to the voxels (and, when refining, the silhouettes) and
+  // starts the worker. `configuration`: LoadConfigurationSetup(options).
+  // Throws std::invalid_argument when `configuration` and
   // options.configuration.enabled disagree.
-  ShapeService(const ShapeServiceOptions& options, RigSetup setup, LcmBus& bus,
+  ShapeService(const ShapeServiceOptions& options, const Rig& rig, LcmBus& bus,
                std::optional<ConfigurationSetup> configuration = {});
   ShapeService(const ShapeService&) = delete;
   ShapeService& operator=(const ShapeService&) = delete;
 
-  // Measures voxel clouds whose images did not come in time, forgets old
-  // frame-sets, publishes the status when due. Call from the bus's thread.
+  // Measures voxel clouds whose silhouettes did not come in time, forgets
+  // old silhouettes, publishes the status when due. Call from the bus's thread.
   void Poll(int64_t now_utime);
   service_status_t Status(int64_t now_utime);
 
  private:
   struct Job {
     voxel_cloud_t voxels;
-    std::optional<FrameSet> images;
+    std::optional<silhouettes_t> silhouettes;
   };
-  struct WaitingVoxels {
-    voxel_cloud_t voxels;
+  template <class Message>
+  struct Waiting {
+    Message message;
     int64_t receive_utime = 0;
   };
-  struct WaitingImages {
-    FrameSet set;
-    int64_t complete_utime = 0;
-  };
 
-  void OnImage(image_t&& image, int64_t receive_utime);
-  // Moved in from the LCM callback: a cloud is tens of kB, every frame-set.
+  // Both moved in from the LCM callback: tens of kB each, every frame-set.
+  void OnSilhouettes(silhouettes_t&& silhouettes, int64_t receive_utime);
   void OnVoxels(voxel_cloud_t&& voxels, int64_t receive_utime);
-  void OnFrameSet(FrameSet set);
-  void CountAssemblyDrops(int64_t before);
   void MeasureAndPublish(const Job& job);
 
   ShapeServiceOptions options_;
   LcmBus& bus_;
+  Rig rig_;
   ShapeStage stage_;
   int64_t pairing_timeout_us_;
-  // The bus thread's: assembly and pairing.
-  FrameSetAssembler assembler_;
-  std::deque<WaitingImages> waiting_images_;
-  std::deque<WaitingVoxels> waiting_voxels_;
+  // The bus thread's: the pairing.
+  std::deque<Waiting<silhouettes_t>> waiting_silhouettes_;
+  std::deque<Waiting<voxel_cloud_t>> waiting_voxels_;
+  std::vector<CompactSilhouette> checked_;  // OnSilhouettes' scratch
   ServiceStatus status_{"shape"};
   ShapeOutput output_;  // the worker's, reused
   int64_t shape_seq_ = 0;

@@ -181,8 +181,6 @@ void LivePipeline::WriteRigFiles() {
   WriteFileAtomically(CarvingConfig(), OptionsToDocumentedYaml(carving));
   ShapeServiceOptions shape;
   shape.rig = carving.rig;
-  shape.backgrounds = carving.backgrounds;
-  shape.assembly = carving.assembly;
   shape.pairing_timeout_ms = 2 * options_.assembly_timeout_ms;
   shape.queue_capacity = options_.queue_capacity;
   WriteFileAtomically(ShapeConfig(), OptionsToDocumentedYaml(shape));

@@ -12,6 +12,7 @@
 
 #include "runtime/lcm/channels.h"
 #include "runtime/lcm/message_convert.h"
+#include "runtime/lcm/silhouette_message.h"
 #include "tests/e2e/live_pipeline.h"
 #include "tests/services/carving/pipeline_test_support.h"
 #include "tests/support/network_test.h"
@@ -223,11 +224,26 @@ std::vector<uint8_t> Garbage(uint32_t seed) {
   return bytes;
 }
 
+// Well-formed silhouettes of the rig: a short run in each view.
+silhouettes_t SmallSilhouettes(const Rig& rig) {
+  std::vector<CompactSilhouette> views(rig.cameras.size());
+  for (size_t k = 0; k < views.size(); ++k) {
+    views[k].width = rig.cameras[k].width;
+    views[k].height = rig.cameras[k].height;
+    views[k].mask = {{10, 10, 20}};
+  }
+  silhouettes_t message{};
+  SilhouettesToMessage(rig, views, &message);
+  message.trigger_seq = 7;
+  return message;
+}
+
 // Malformed messages on every channel the carving and shape services
 // subscribe to; returns how many reached each ({carving, shape}).
-std::pair<int, int> SendMalformed(LcmBus& bus, const std::vector<std::string>& cameras) {
-  int images = 0, clouds = 0;
-  for (const std::string& camera : cameras) {
+std::pair<int, int> SendMalformed(LcmBus& bus, const Rig& rig) {
+  int images = 0, clouds = 0, silhouettes = 0;
+  for (const Camera& rig_camera : rig.cameras) {
+    const std::string& camera = rig_camera.name;
     const std::string channel = channels::Image(camera);
     bus.Publish(channel, RawBytes{Garbage(static_cast<uint32_t>(images))});
     bus.Publish(channel, RawBytes{Truncated(Encode(SmallImage(camera)))});
@@ -254,7 +270,20 @@ std::pair<int, int> SendMalformed(LcmBus& bus, const std::vector<std::string>& c
   const voxel_cloud_t valid = SmallCloud();
   bus.Publish(channels::kVoxels, RawBytes{LyingCount(Encode(valid), 0)});
   clouds += 5;
-  return {images, images + clouds};
+  bus.Publish(channels::kSilhouettes, RawBytes{Garbage(98)});
+  bus.Publish(channels::kSilhouettes, RawBytes{Truncated(Encode(SmallSilhouettes(rig)))});
+  silhouettes_t missing = SmallSilhouettes(rig);  // a camera short
+  missing.views.pop_back();
+  missing.num_views = static_cast<int32_t>(missing.views.size());
+  bus.Publish(channels::kSilhouettes, missing);
+  silhouettes_t renamed = SmallSilhouettes(rig);  // a view naming another camera
+  renamed.views[0].camera = "cam9";
+  bus.Publish(channels::kSilhouettes, renamed);
+  silhouettes_t beyond = SmallSilhouettes(rig);  // a run beyond the image
+  beyond.views[0].mask_end[0] = static_cast<int16_t>(rig.cameras[0].width + 1);
+  bus.Publish(channels::kSilhouettes, beyond);
+  silhouettes += 5;
+  return {images, clouds + silhouettes};
 }
 
 TEST_F(PipelineFaultsTest, MalformedMessagesAreRejectedAndCountedAndMeasuringGoesOn) {
@@ -263,11 +292,9 @@ TEST_F(PipelineFaultsTest, MalformedMessagesAreRejectedAndCountedAndMeasuringGoe
   LivePipeline pipeline("malformed", options);
   ASSERT_EQ(pipeline.StartServices(), "");
   Recorder& recorder = pipeline.recorder();
-  std::vector<std::string> cameras;
-  for (const Camera& camera : pipeline.rig().cameras) cameras.push_back(camera.name);
   LcmBus sender(kLcmUrl);
   // While the cameras are idle every message arrives: the counts are exact.
-  const auto [to_carving, to_shape] = SendMalformed(sender, cameras);
+  const auto [to_carving, to_shape] = SendMalformed(sender, pipeline.rig());
   const int64_t sent = NowUtime();
   const auto carving = recorder.WaitForStatus("carving", sent + 200'000, milliseconds(10000));
   const auto shape = recorder.WaitForStatus("shape", sent + 200'000, milliseconds(10000));
@@ -284,7 +311,7 @@ TEST_F(PipelineFaultsTest, MalformedMessagesAreRejectedAndCountedAndMeasuringGoe
   // And again while the pipeline measures: it goes on measuring, correctly.
   pipeline.StartCapture(6.0);
   ASSERT_TRUE(recorder.WaitFor([&] { return recorder.ShapeCount() >= 5; }, milliseconds(30000)));
-  SendMalformed(sender, cameras);
+  SendMalformed(sender, pipeline.rig());
   ASSERT_EQ(pipeline.WaitForCapture(6.0), "");
   pipeline.Drain();
   const Score score =

@@ -97,15 +97,19 @@ DemoProcess Capture(const DemoSettings& settings, const DemoPlan& plan) {
   return process;
 }
 
-// The carving and shape services: defaults, the demo's rig and backgrounds.
+// The carving and shape services: defaults, the demo's rig, and the
+// backgrounds for the carving service (the shape service gets silhouettes).
 DemoProcess Service(const DemoSettings& settings, const DemoPlan& plan, const std::string& name) {
   DemoProcess process{name,
                       {Program(settings, "shapesense-" + name), "--lcm-url", settings.lcm_url,
-                       "--rig", plan.rig.string(), "--backgrounds", plan.backgrounds.string(),
-                       "--duration", Backstop(settings)},
+                       "--rig", plan.rig.string(), "--duration", Backstop(settings)},
                       "",
                       name,
                       false};
+  if (name == "carving") {
+    process.argv.push_back("--backgrounds");
+    process.argv.push_back(plan.backgrounds.string());
+  }
   if (name == "shape" && !settings.shape_config.empty()) {
     process.argv.push_back("--config");
     process.argv.push_back(settings.shape_config.string());

@@ -100,8 +100,7 @@ class ReplayPipeline {
                  ShapeWriter& writer, const ReplayObserver& observer, bool progress)
       : carving_stage_(setup.rig, setup.backgrounds, carving.silhouette, carving.carving,
                        TableProgress(progress)),
-        shape_stage_(setup.rig, setup.backgrounds, shape.silhouette, shape.shape,
-                     std::move(configuration)),
+        shape_stage_(setup.rig, shape.shape, std::move(configuration)),
         assembler_(CameraNames(setup.rig), carving.assembly),
         writer_(writer),
         observer_(observer) {}
@@ -141,8 +140,11 @@ class ReplayPipeline {
       writer_.WriteError(FrameNameOf(set.trigger_seq, set.trigger_utime), error);
       return;
     }
-    const FrameSet* images = shape_stage_.wants_images() ? &set : nullptr;
-    if (!shape_stage_.Process(carved_.message, images, &shaped_).empty())
+    // What the live shape service gets from the carving service: the cloud
+    // and the compact silhouettes.
+    const silhouettes_t* silhouettes =
+        shape_stage_.wants_silhouettes() ? &carved_.silhouettes_message : nullptr;
+    if (!shape_stage_.Process(carved_.message, silhouettes, &shaped_).empty())
       return;  // cannot happen: our own cloud
     shaped_.message.header.seq = shape_seq_++;
     shaped_.message.header.utime = timestamp;
@@ -165,13 +167,13 @@ class ReplayPipeline {
   int64_t shape_seq_ = 0;
 };
 
-// Both configs, with the rig and backgrounds of the carving one (or the
-// command line's) for both: replay measures with one rig.
+// Both configs, with the rig of the carving one (or the command line's) for
+// both: replay measures with one rig.
 std::pair<CarvingServiceOptions, ShapeServiceOptions> LoadReplayOptions(const ReplayArgs& args) {
   const CarvingServiceOptions carving =
       LoadCarvingServiceOptions({args.config, std::nullopt, args.rig, args.backgrounds, 0.0});
-  const ShapeServiceOptions shape = LoadShapeServiceOptions(
-      {args.shape_config, std::nullopt, fs::path(carving.rig), fs::path(carving.backgrounds), 0.0});
+  const ShapeServiceOptions shape =
+      LoadShapeServiceOptions({args.shape_config, std::nullopt, fs::path(carving.rig), {}, 0.0});
   return {carving, shape};
 }
 

@@ -50,7 +50,6 @@ class ReplayTest : public ::testing::Test {
     WriteFileAtomically(dir_ / "carving.yaml", OptionsToDocumentedYaml(carving));
     ShapeServiceOptions shape = testing::TestShapeOptions();
     shape.rig = carving.rig;
-    shape.backgrounds = carving.backgrounds;
     WriteFileAtomically(dir_ / "shape.yaml", OptionsToDocumentedYaml(shape));
   }
   void TearDown() override { fs::remove_all(dir_); }
@@ -75,7 +74,7 @@ class ReplayTest : public ::testing::Test {
     const ShapeServiceOptions shape = LoadShapeServiceOptions(shape_args);
     LcmBus bus("memq://");
     CarvingService carving_service(carving, LoadRigSetup(carving.rig, carving.backgrounds), bus);
-    ShapeService shape_service(shape, LoadRigSetup(shape.rig, shape.backgrounds), bus);
+    ShapeService shape_service(shape, LoadRigSetup(shape.rig, {}).rig, bus);
     lcm::LogFile recording((dir_ / "images.lcmlog").string(), "w");
     // A malformed event on a camera channel, as a faulty sender would leave in a log.
     WriteEvent(recording, channels::Image("cam0"), std::vector<uint8_t>(40, 0x33), NowUtime());

@@ -41,7 +41,6 @@ class ReplayConfigurationTest : public ::testing::Test {
     WriteFileAtomically(dir_ / "carving.yaml", OptionsToDocumentedYaml(carving));
     ShapeServiceOptions shape = testing::TestShapeOptions();
     shape.rig = carving.rig;
-    shape.backgrounds = carving.backgrounds;
     shape.configuration.enabled = true;
     shape.configuration.manipulator = "arm.yaml";
     const Vec3 base = rig_.rig().base_point;

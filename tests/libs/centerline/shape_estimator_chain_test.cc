@@ -14,6 +14,7 @@
 #include "libs/carving/carver.h"
 #include "libs/centerline/shape_estimator.h"
 #include "libs/geometry/polyline.h"
+#include "libs/silhouette/compact_silhouette.h"
 #include "libs/silhouette/silhouette.h"
 #include "libs/sim/scene_generators.h"
 #include "libs/sim/tube_scene.h"
@@ -51,6 +52,35 @@ Errors Measure(const ShapeEstimate& e, const GroundTruth& truth) {
   return errors;
 }
 
+// The silhouettes as the shape service receives them: compacted by the
+// carving service and expanded again. Prints their size on the wire's order.
+std::vector<Silhouette> ThroughCompaction(const std::vector<Silhouette>& silhouettes) {
+  std::vector<Silhouette> expanded(silhouettes.size());
+  CompactScratch scratch;
+  size_t bytes = 0;
+  for (size_t k = 0; k < silhouettes.size(); ++k) {
+    CompactSilhouette compact;
+    Compact(silhouettes[k], &compact, &scratch);
+    EXPECT_EQ(Validate(compact), "");
+    bytes += 6 * (compact.mask.size() + compact.markers.size() + compact.band.size()) +
+             compact.band_difference.size();
+    Expand(compact, &expanded[k]);
+  }
+  std::printf("compact silhouettes: %zu bytes\n", bytes);
+  return expanded;
+}
+
+// Bit for bit: the compaction keeps everything the estimate reads.
+void ExpectSameEstimate(const ShapeEstimate& a, const ShapeEstimate& b) {
+  ASSERT_EQ(a.valid, b.valid);
+  ASSERT_EQ(a.centerline.size(), b.centerline.size());
+  for (size_t i = 0; i < a.centerline.size(); ++i) EXPECT_EQ(a.centerline[i], b.centerline[i]);
+  EXPECT_EQ(a.tip, b.tip);
+  EXPECT_EQ(a.tube_radius, b.tube_radius);
+  ASSERT_EQ(a.markers.size(), b.markers.size());
+  for (size_t m = 0; m < a.markers.size(); ++m) EXPECT_EQ(a.markers[m], b.markers[m]);
+}
+
 class ChainTest : public ::testing::Test {
  protected:
   // Every scene of one rig through the chain; returns the errors per scene.
@@ -73,6 +103,7 @@ class ChainTest : public ::testing::Test {
       carver.CarveHierarchical(silhouettes, &cloud);
       const ShapeEstimate e = estimator.Estimate(cloud, silhouettes);
       EXPECT_TRUE(e.valid) << e.error;
+      ExpectSameEstimate(e, estimator.Estimate(cloud, ThroughCompaction(silhouettes)));
       if (!e.valid) continue;
       const Errors errors = Measure(e, truth);
       std::printf(

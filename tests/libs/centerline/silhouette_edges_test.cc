@@ -5,7 +5,9 @@
 #include <cmath>
 #include <random>
 
+#include "libs/silhouette/compact_silhouette.h"
 #include "tests/libs/centerline/tube_fixture.h"
+#include "tests/libs/silhouette/synthetic_frame.h"
 
 namespace shapesense {
 namespace {
@@ -135,6 +137,40 @@ TEST(FindEdgeAlongTest, GivesUpWhereTheEdgeCannotBeMeasured) {
   Silhouette masked = faint;
   masked.mask = s.mask;
   EXPECT_FALSE(FindEdgeAlong(masked, Vec2(70, 60), normal, 15).has_value());
+}
+
+// What the shape service gets (libs/silhouette/compact_silhouette.h) must
+// place every edge where the full silhouette does: walks from random pixels
+// of the mask in random directions, on frames with holes, blobs, shadows and
+// a tube leaving the image.
+TEST(FindEdgeAlongTest, FindsTheSameEdgesInACompactedSilhouette) {
+  std::mt19937 rng(15);
+  int found = 0;
+  for (unsigned seed = 1; seed <= 3; ++seed) {
+    testing::FrameSpec spec;
+    spec.seed = seed;
+    spec.second_tube = seed == 3;
+    const testing::SyntheticFrame frame = testing::MakeFrame(spec);
+    Silhouette original;
+    SilhouetteExtractor(SilhouetteOptions{}).Extract(frame.image, frame.background, &original);
+    CompactSilhouette compact;
+    CompactScratch scratch;
+    Compact(original, &compact, &scratch);
+    Silhouette expanded;
+    Expand(compact, &expanded);
+    for (int walk = 0; walk < 4000; ++walk) {
+      const RowRun& run = original.runs[rng() % original.runs.size()];
+      const Vec2 start(Uniform(rng, run.x0, run.x1 - 1), run.y + Uniform(rng, -0.4, 0.4));
+      const double angle = Uniform(rng, 0.0, 2.0 * M_PI);
+      const Vec2 direction(std::cos(angle), std::sin(angle));
+      const std::optional<double> a = FindEdgeAlong(original, start, direction, 40);
+      ASSERT_EQ(a, FindEdgeAlong(expanded, start, direction, 40))
+          << "seed " << seed << " from (" << start.transpose() << ") along ("
+          << direction.transpose() << ")";
+      found += a.has_value() ? 1 : 0;
+    }
+  }
+  EXPECT_GT(found, 3000);  // most walks reach an edge: the test is not vacuous
 }
 
 TEST(CoverageTest, MatchesSupersampling) {

@@ -41,8 +41,7 @@ TEST_F(PipelineStagesTest, CarvesAndMeasuresWithinAMillimetreWithEveryStageTime)
   const ShapeServiceOptions shape_options = testing::TestShapeOptions();
   const CarvingStage carving(rig_->rig(), rig_->backgrounds(), carving_options.silhouette,
                              carving_options.carving);
-  const ShapeStage shape(rig_->rig(), rig_->backgrounds(), shape_options.silhouette,
-                         shape_options.shape);
+  const ShapeStage shape(rig_->rig(), shape_options.shape);
   CarvingOutput carved;
   ShapeOutput shaped;
   for (int i = 0; i < 3; ++i) {
@@ -51,8 +50,13 @@ TEST_F(PipelineStagesTest, CarvesAndMeasuresWithinAMillimetreWithEveryStageTime)
     EXPECT_EQ(carved.message.trigger_seq, 100 + i);
     EXPECT_EQ(carved.message.trigger_utime, set.trigger_utime);
     EXPECT_GT(carved.message.num_voxels, 100);
-    ASSERT_EQ(shape.Process(carved.message, &set, &shaped), "");
+    EXPECT_EQ(carved.silhouettes_message.trigger_seq, 100 + i);
+    EXPECT_EQ(carved.silhouettes_message.num_views, 3);
+    // One datagram: well under 64 kB for three VGA views.
+    EXPECT_LT(carved.silhouettes_message.getEncodedSize(), 48'000);
+    ASSERT_EQ(shape.Process(carved.message, &carved.silhouettes_message, &shaped), "");
     EXPECT_EQ(shaped.warning, "");
+    EXPECT_GT(shaped.estimate.silhouette_residual_mm, 0.0);  // refined
     ASSERT_TRUE(shaped.estimate.valid) << shaped.estimate.error;
     const GroundTruth truth = TruthOf(rig_->Scene(i));
     const double rms = testing::TwoWayRms(shaped.estimate.centerline, truth.centerline);
@@ -63,6 +67,21 @@ TEST_F(PipelineStagesTest, CarvesAndMeasuresWithinAMillimetreWithEveryStageTime)
     }
     EXPECT_EQ(shaped.message.num_stage_times, 5);
   }
+}
+
+TEST_F(PipelineStagesTest, SilhouettesOfAnotherFrameSetAreNotUsed) {
+  const CarvingServiceOptions carving_options = testing::TestCarvingOptions();
+  const CarvingStage carving(rig_->rig(), rig_->backgrounds(), carving_options.silhouette,
+                             carving_options.carving);
+  const ShapeStage shape(rig_->rig(), testing::TestShapeOptions().shape);
+  CarvingOutput first;
+  CarvingOutput second;
+  ASSERT_EQ(carving.Process(AssembledSet(*rig_, 0, 1, image_t::PIXEL_BGR8), &first), "");
+  ASSERT_EQ(carving.Process(AssembledSet(*rig_, 1, 2, image_t::PIXEL_BGR8), &second), "");
+  ShapeOutput shaped;
+  ASSERT_EQ(shape.Process(first.message, &second.silhouettes_message, &shaped), "");
+  EXPECT_NE(shaped.warning.find("of another frame-set"), std::string::npos) << shaped.warning;
+  EXPECT_EQ(shaped.estimate.silhouette_residual_mm, 0.0);
 }
 
 }  // namespace

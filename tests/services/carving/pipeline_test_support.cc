@@ -104,8 +104,6 @@ CarvingServiceOptions TestCarvingOptions() {
 ShapeServiceOptions TestShapeOptions() {
   ShapeServiceOptions options;
   options.rig = "(in memory)";
-  options.backgrounds = "(in memory)";
-  options.assembly.timeout_ms = 5000;
   options.pairing_timeout_ms = 20000;
   options.queue_capacity = 64;
   return options;

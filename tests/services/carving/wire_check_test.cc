@@ -9,6 +9,7 @@
 #include <random>
 
 #include "runtime/lcm/message_convert.h"
+#include "runtime/lcm/silhouette_message.h"
 #include "shapesense/service_status_t.hpp"
 #include "tests/services/carving/pipeline_test_support.h"
 
@@ -54,6 +55,24 @@ shape_t RandomShape(std::mt19937& rng) {
   shape.stage_times = RandomStages(rng);
   shape.num_stage_times = static_cast<int32_t>(shape.stage_times.size());
   return shape;
+}
+
+silhouettes_t RandomSilhouettes(std::mt19937& rng) {
+  Rig rig;
+  std::vector<CompactSilhouette> views(rng() % 4);
+  for (CompactSilhouette& view : views) {
+    rig.cameras.emplace_back();
+    rig.cameras.back().name = std::string(1 + rng() % 5, 'c');
+    view.width = 40;
+    view.height = 30;
+    for (int y = 0; y < static_cast<int>(rng() % 6); ++y) view.mask.push_back({y, 3, 9});
+    for (int y = 0; y < static_cast<int>(rng() % 3); ++y) view.markers.push_back({y, 4, 5});
+    for (int y = 0; y < static_cast<int>(rng() % 6); ++y) view.band.push_back({y, 1, 4});
+    view.band_difference.assign(3 * view.band.size(), 7);
+  }
+  silhouettes_t message{};
+  SilhouettesToMessage(rig, views, &message);
+  return message;
 }
 
 // Every honest encoding passes and decodes; cutting or extending it fails;
@@ -102,6 +121,17 @@ TEST(WireCheckTest, VoxelCloudMessages) {
 TEST(WireCheckTest, ShapeMessages) {
   CheckType<shape_t>(RandomShape, [](const shape_t& m) {
     return std::max({m.centerline.size(), m.markers.size(), m.stage_times.size()});
+  });
+}
+
+TEST(WireCheckTest, SilhouetteMessages) {
+  CheckType<silhouettes_t>(RandomSilhouettes, [](const silhouettes_t& m) {
+    size_t largest = m.views.size();
+    for (const silhouette_view_t& v : m.views) {
+      largest = std::max({largest, v.mask_row.size(), v.tape_row.size(), v.band_row.size(),
+                          v.band_difference.size()});
+    }
+    return largest;
   });
 }
 

@@ -98,7 +98,7 @@ SceneRenderer* ShapeConfigurationTest::renderer_ = nullptr;
 
 TEST_F(ShapeConfigurationTest, EveryShapeCarriesTheConfigurationCloseToTheTruth) {
   CarvingService carving(testing::TestCarvingOptions(), rig_->Setup(), bus_);
-  ShapeService shape(options_, rig_->Setup(), bus_, setup_);
+  ShapeService shape(options_, rig_->rig(), bus_, setup_);
   std::mt19937 rng(3);
   std::uniform_real_distribution<double> unit(0.0, 1.0);
   for (int i = 0; i < 3; ++i) {
@@ -132,7 +132,7 @@ TEST_F(ShapeConfigurationTest, EveryShapeCarriesTheConfigurationCloseToTheTruth)
 
 TEST_F(ShapeConfigurationTest, AHiddenBandLeavesNoConfigurationAndTheStatusSaysWhy) {
   CarvingService carving(testing::TestCarvingOptions(), rig_->Setup(), bus_);
-  ShapeService shape(options_, rig_->Setup(), bus_, setup_);
+  ShapeService shape(options_, rig_->rig(), bus_, setup_);
   TubeScene scene = Scene(Configuration(0.006, -0.004, 0.01, 0.02));
   scene.tapes.pop_back();
   const shape_t* measured = Measure(scene, 50, carving, shape);
@@ -150,8 +150,7 @@ TEST_F(ShapeConfigurationTest, TheShapeStageThatReplaySharesSensesQToo) {
   const CarvingServiceOptions carving_options = testing::TestCarvingOptions();
   const CarvingStage carving(rig_->rig(), rig_->backgrounds(), carving_options.silhouette,
                              carving_options.carving);
-  const ShapeStage stage(rig_->rig(), rig_->backgrounds(), options_.silhouette, options_.shape,
-                         setup_);
+  const ShapeStage stage(rig_->rig(), options_.shape, setup_);
   EXPECT_TRUE(stage.senses_configuration());
   const Configuration q(-0.004, 0.007, 0.02, 0.01);
   FrameSetAssembler assembler(CameraNames(rig_->rig()), carving_options.assembly);
@@ -166,7 +165,7 @@ TEST_F(ShapeConfigurationTest, TheShapeStageThatReplaySharesSensesQToo) {
   CarvingOutput carved;
   ASSERT_EQ(carving.Process(*set, &carved), "");
   ShapeOutput out;
-  ASSERT_EQ(stage.Process(carved.message, &*set, &out), "");
+  ASSERT_EQ(stage.Process(carved.message, &carved.silhouettes_message, &out), "");
   ASSERT_TRUE(out.configuration.valid) << out.configuration.reason;
   EXPECT_TRUE(out.message.has_configuration);
   EXPECT_EQ(MessageConfiguration(out.message), out.configuration.q);
@@ -175,9 +174,7 @@ TEST_F(ShapeConfigurationTest, TheShapeStageThatReplaySharesSensesQToo) {
   // A geometry that fails validation is refused when the stage is made.
   ConfigurationSetup bad = setup_;
   bad.geometry.rest.distal = 5.0;
-  EXPECT_THROW(
-      ShapeStage(rig_->rig(), rig_->backgrounds(), options_.silhouette, options_.shape, bad),
-      std::invalid_argument);
+  EXPECT_THROW(ShapeStage(rig_->rig(), options_.shape, bad), std::invalid_argument);
 }
 
 TEST(ShapeMessageConfigurationTest, QGoesInAndOutAndMustBeFinite) {
@@ -198,8 +195,8 @@ TEST(ShapeMessageConfigurationTest, QGoesInAndOutAndMustBeFinite) {
 TEST_F(ShapeConfigurationTest, TheSectionAndTheSetupMustAgree) {
   ShapeServiceOptions off = options_;
   off.configuration.enabled = false;
-  EXPECT_THROW(ShapeService(off, rig_->Setup(), bus_, setup_), std::invalid_argument);
-  EXPECT_THROW(ShapeService(options_, rig_->Setup(), bus_), std::invalid_argument);
+  EXPECT_THROW(ShapeService(off, rig_->rig(), bus_, setup_), std::invalid_argument);
+  EXPECT_THROW(ShapeService(options_, rig_->rig(), bus_), std::invalid_argument);
 }
 
 class ShapeConfigurationFilesTest : public ::testing::Test {

@@ -1,8 +1,9 @@
 // The shape service in process over memq://, behind the carving service and
 // on its own: shapes within 1 mm RMS of the truth with every stage time,
-// pairing of voxel clouds with their images in either order, measuring
-// without images after the pairing timeout, malformed messages on every
-// channel it listens to counted and survived, config checks.
+// pairing of voxel clouds with their silhouettes in either order, measuring
+// unrefined after the pairing timeout or on silhouettes of another
+// frame-set, malformed messages on every channel it listens to counted and
+// survived, config checks.
 #include "services/shape/shape_service.h"
 
 #include <gtest/gtest.h>
@@ -43,8 +44,8 @@ class ShapeServiceTest : public ::testing::Test {
     return HandleUntil(
         bus_, [&] { return shapes_.size() >= n; }, poll);
   }
-  // The voxel cloud the carving stage makes of scene i.
-  voxel_cloud_t Carve(int scene, int64_t seq, int64_t trigger_utime) {
+  // What the carving stage makes of scene i: the voxel cloud and the compact silhouettes.
+  CarvingOutput Carve(int scene, int64_t seq, int64_t trigger_utime) {
     const CarvingServiceOptions options = testing::TestCarvingOptions();
     const CarvingStage stage(rig_->rig(), rig_->backgrounds(), options.silhouette, options.carving);
     FrameSetAssembler assembler(CameraNames(rig_->rig()), options.assembly);
@@ -55,7 +56,7 @@ class ShapeServiceTest : public ::testing::Test {
         EXPECT_EQ(stage.Process(*result.completed, &out), "");
       }
     }
-    return out.message;
+    return out;
   }
 
   static TestRig* rig_;
@@ -66,7 +67,7 @@ TestRig* ShapeServiceTest::rig_ = nullptr;
 
 TEST_F(ShapeServiceTest, BehindTheCarvingServiceEveryFrameSetIsMeasuredWithinAMillimetre) {
   CarvingService carving(testing::TestCarvingOptions(), rig_->Setup(), bus_);
-  ShapeService shape(testing::TestShapeOptions(), rig_->Setup(), bus_);
+  ShapeService shape(testing::TestShapeOptions(), rig_->rig(), bus_);
   SubscribeShapes();
   constexpr int kSets = 4;
   std::map<std::string, double> stage_ms;
@@ -110,25 +111,43 @@ TEST_F(ShapeServiceTest, BehindTheCarvingServiceEveryFrameSetIsMeasuredWithinAMi
   EXPECT_EQ(status.dropped + status.rejected + status.errors, 0) << status.last_error;
 }
 
-TEST_F(ShapeServiceTest, AVoxelCloudThatComesBeforeItsImagesWaitsForThem) {
-  ShapeService shape(testing::TestShapeOptions(), rig_->Setup(), bus_);
+TEST_F(ShapeServiceTest, AVoxelCloudThatComesBeforeItsSilhouettesWaitsForThem) {
+  ShapeService shape(testing::TestShapeOptions(), rig_->rig(), bus_);
   SubscribeShapes();
   const int64_t trigger = NowUtime();
-  bus_.Publish(channels::kVoxels, Carve(0, 7, trigger));
+  const CarvingOutput carved = Carve(0, 7, trigger);
+  // Another frame-set's silhouettes first: they must not pair with this cloud.
+  const CarvingOutput other = Carve(1, 6, trigger - 10'000);
+  bus_.Publish(channels::kSilhouettes, other.silhouettes_message);
+  bus_.Publish(channels::kVoxels, carved.message);
   ASSERT_TRUE(HandleUntil(bus_, [&] { return shape.Status(NowUtime()).received == 1; }));
-  Publish(rig_->Messages(0, 7, trigger));
+  EXPECT_TRUE(shapes_.empty());
+  bus_.Publish(channels::kSilhouettes, carved.silhouettes_message);
   ASSERT_TRUE(HandleUntilShapes(1, [&](int64_t now) { shape.Poll(now); }));
   EXPECT_EQ(shapes_[0].trigger_seq, 7);
   EXPECT_TRUE(shapes_[0].valid);
+  EXPECT_GT(shapes_[0].centerline_residual_mm, 0.0);  // refined
   EXPECT_EQ(shape.Status(NowUtime()).errors, 0) << shape.Status(NowUtime()).last_error;
 }
 
-TEST_F(ShapeServiceTest, WithoutItsImagesACloudIsMeasuredUnrefinedAfterThePairingTimeout) {
+TEST_F(ShapeServiceTest, SilhouettesThatComeFirstWaitForTheirCloud) {
+  ShapeService shape(testing::TestShapeOptions(), rig_->rig(), bus_);
+  SubscribeShapes();
+  const CarvingOutput carved = Carve(2, 12, NowUtime());
+  bus_.Publish(channels::kSilhouettes, carved.silhouettes_message);
+  bus_.Publish(channels::kVoxels, carved.message);
+  ASSERT_TRUE(HandleUntilShapes(1, [&](int64_t now) { shape.Poll(now); }));
+  EXPECT_EQ(shapes_[0].trigger_seq, 12);
+  EXPECT_GT(shapes_[0].centerline_residual_mm, 0.0);
+  EXPECT_EQ(shape.Status(NowUtime()).errors, 0) << shape.Status(NowUtime()).last_error;
+}
+
+TEST_F(ShapeServiceTest, WithoutItsSilhouettesACloudIsMeasuredUnrefinedAfterThePairingTimeout) {
   ShapeServiceOptions options = testing::TestShapeOptions();
   options.pairing_timeout_ms = 50;
-  ShapeService shape(options, rig_->Setup(), bus_);
+  ShapeService shape(options, rig_->rig(), bus_);
   SubscribeShapes();
-  bus_.Publish(channels::kVoxels, Carve(1, 8, NowUtime()));
+  bus_.Publish(channels::kVoxels, Carve(1, 8, NowUtime()).message);
   ASSERT_TRUE(HandleUntilShapes(1, [&](int64_t now) { shape.Poll(now); }));
   EXPECT_TRUE(shapes_[0].valid) << shapes_[0].error;
   const service_status_t status = shape.Status(NowUtime());
@@ -136,24 +155,24 @@ TEST_F(ShapeServiceTest, WithoutItsImagesACloudIsMeasuredUnrefinedAfterThePairin
   EXPECT_NE(status.last_error.find("not refined"), std::string::npos) << status.last_error;
 }
 
-TEST_F(ShapeServiceTest, WithRefinementOffItNeedsNoImagesNorBackgrounds) {
+TEST_F(ShapeServiceTest, WithRefinementOffItNeedsNoSilhouettes) {
   ShapeServiceOptions options = testing::TestShapeOptions();
   options.shape.refine_with_silhouettes = false;
-  options.backgrounds.clear();
   EXPECT_EQ(options.Validate(), "");
-  ShapeService shape(options, RigSetup{rig_->rig(), {}}, bus_);
+  ShapeService shape(options, rig_->rig(), bus_);
   SubscribeShapes();
-  bus_.Publish(channels::kVoxels, Carve(2, 9, NowUtime()));
+  bus_.Publish(channels::kVoxels, Carve(2, 9, NowUtime()).message);
   ASSERT_TRUE(HandleUntilShapes(1, [&](int64_t now) { shape.Poll(now); }));
   EXPECT_TRUE(shapes_[0].valid) << shapes_[0].error;
   EXPECT_EQ(shape.Status(NowUtime()).errors, 0);
 }
 
 TEST_F(ShapeServiceTest, MalformedMessagesOnEveryChannelAreCountedAndNeverStopIt) {
-  ShapeService shape(testing::TestShapeOptions(), rig_->Setup(), bus_);
+  ShapeService shape(testing::TestShapeOptions(), rig_->rig(), bus_);
   SubscribeShapes();
   const int64_t trigger = NowUtime();
-  const voxel_cloud_t good = Carve(3, 11, trigger);
+  const CarvingOutput carved = Carve(3, 11, trigger);
+  const voxel_cloud_t& good = carved.message;
   const std::vector<uint8_t> bytes = Encode(good);
   int rejected = 0;
   // The voxel channel: undecodable ...
@@ -176,14 +195,14 @@ TEST_F(ShapeServiceTest, MalformedMessagesOnEveryChannelAreCountedAndNeverStopIt
     bus_.Publish(channels::kVoxels, bad);
     ++rejected;
   }
-  // The image channels.
-  image_t image = rig_->Messages(3, 11, trigger)[0];
-  image.width = 3;
-  bus_.Publish(channels::Image("cam0"), image);
-  bus_.Publish(channels::Image("cam1"), RawBytes{std::vector<uint8_t>(10, 1)});
+  // The silhouette channel: undecodable, rejected by the bus.
+  const std::vector<uint8_t> silhouette_bytes = Encode(carved.silhouettes_message);
+  bus_.Publish(channels::kSilhouettes, RawBytes{std::vector<uint8_t>(silhouette_bytes.begin(),
+                                                                     silhouette_bytes.end() - 3)});
+  bus_.Publish(channels::kSilhouettes, RawBytes{std::vector<uint8_t>(10, 1)});
   rejected += 2;
   // Then the real thing still works.
-  Publish(rig_->Messages(3, 11, trigger));
+  bus_.Publish(channels::kSilhouettes, carved.silhouettes_message);
   bus_.Publish(channels::kVoxels, good);
   ASSERT_TRUE(HandleUntil(
       bus_,
@@ -200,13 +219,35 @@ TEST_F(ShapeServiceTest, MalformedMessagesOnEveryChannelAreCountedAndNeverStopIt
   for (const shape_t& s : shapes_) EXPECT_EQ(s.trigger_seq, 11) << "a malformed cloud was measured";
 }
 
+TEST_F(ShapeServiceTest, DecodableButMalformedSilhouettesAreRejectedAndTheCloudMeasuredUnrefined) {
+  ShapeServiceOptions options = testing::TestShapeOptions();
+  options.pairing_timeout_ms = 50;
+  ShapeService shape(options, rig_->rig(), bus_);
+  SubscribeShapes();
+  CarvingOutput carved = Carve(0, 21, NowUtime());
+  carved.silhouettes_message.views[1].mask_end[0] = 30000;  // a run beyond the image
+  bus_.Publish(channels::kSilhouettes, carved.silhouettes_message);
+  carved.silhouettes_message.views.pop_back();  // a camera short
+  carved.silhouettes_message.num_views = 2;
+  bus_.Publish(channels::kSilhouettes, carved.silhouettes_message);
+  bus_.Publish(channels::kVoxels, carved.message);
+  ASSERT_TRUE(HandleUntilShapes(1, [&](int64_t now) { shape.Poll(now); }));
+  EXPECT_TRUE(shapes_[0].valid) << shapes_[0].error;
+  EXPECT_EQ(shapes_[0].centerline_residual_mm, 0.0);  // not refined
+  const service_status_t status = shape.Status(NowUtime());
+  EXPECT_EQ(status.rejected, 2);
+  EXPECT_EQ(status.errors, 1);  // measured without silhouettes
+  EXPECT_NE(status.last_error.find("not refined"), std::string::npos) << status.last_error;
+}
+
 TEST(ShapeServiceOptionsTest, ValidationNamesTheKey) {
   ShapeServiceOptions options;
   EXPECT_NE(options.Validate().find("rig"), std::string::npos);
   options.rig = "rig.yaml";
-  EXPECT_NE(options.Validate().find("backgrounds"), std::string::npos);
-  options.backgrounds = "background";
   EXPECT_EQ(options.Validate(), "");
+  options.max_waiting = 0;
+  EXPECT_NE(options.Validate().find("max_waiting"), std::string::npos);
+  options.max_waiting = 8;
   options.pairing_timeout_ms = 0;
   EXPECT_NE(options.Validate().find("pairing_timeout_ms"), std::string::npos);
   options.pairing_timeout_ms = 100;
@@ -220,7 +261,6 @@ TEST(ShapeServiceRunTest, StartsAndStopsOnMemq) {
   TestRig(5).WriteFiles(dir);
   ServiceArgs args;
   args.rig = dir / "rig.yaml";
-  args.backgrounds = dir / "background";
   args.lcm_url = "memq://";
   args.duration_s = 0.2;
   std::atomic<bool> stop{false};
@@ -228,6 +268,14 @@ TEST(ShapeServiceRunTest, StartsAndStopsOnMemq) {
   const service_status_t status = RunShapeService(args, stop, log);
   EXPECT_EQ(status.service, "shape");
   EXPECT_NE(log.str().find("refining"), std::string::npos);
+  // It takes no backgrounds, and says so rather than ignore them.
+  args.backgrounds = dir / "background";
+  try {
+    RunShapeService(args, stop, log);
+    ADD_FAILURE() << "--backgrounds was accepted";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("--backgrounds"), std::string::npos) << e.what();
+  }
   std::filesystem::remove_all(dir);
 }
 
