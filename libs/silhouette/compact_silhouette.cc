@@ -2,12 +2,11 @@
 
 #include <algorithm>
 #include <cstring>
-#include <opencv2/imgproc.hpp>
 
 namespace shapesense {
 namespace {
 
-// Appends the runs of `row[x0, x1)` where `inside(x)` holds, in row y.
+// Appends the runs of [x0, x1) of row y where `inside(x)` holds.
 template <class Predicate>
 void AppendRuns(int y, int x0, int x1, Predicate inside, std::vector<RowRun>* runs) {
   int x = x0;
@@ -28,36 +27,106 @@ void CompactMarkers(const Silhouette& silhouette, std::vector<RowRun>* markers) 
   }
 }
 
-// The band: pixels within kEdgeBandRadius of a mask pixel and of a pixel
-// outside it, i.e. in the mask grown by the radius and not in the mask
-// shrunk by it. Outside the image counts as neither (OpenCV's default border
-// for dilation and erosion), so the image's border is not an outline.
+// Row arithmetic on sorted, disjoint runs [x0, x1) of one row (y unused).
+
+// `runs` sorted by x0, merged where they overlap or touch.
+void MergeInPlace(std::vector<RowRun>* runs) {
+  std::sort(runs->begin(), runs->end(),
+            [](const RowRun& a, const RowRun& b) { return a.x0 < b.x0; });
+  size_t kept = 0;
+  for (const RowRun& run : *runs) {
+    if (kept > 0 && run.x0 <= (*runs)[kept - 1].x1) {
+      (*runs)[kept - 1].x1 = std::max((*runs)[kept - 1].x1, run.x1);
+    } else {
+      (*runs)[kept++] = run;
+    }
+  }
+  runs->resize(kept);
+}
+
+void Intersect(const std::vector<RowRun>& a, const std::vector<RowRun>& b,
+               std::vector<RowRun>* out) {
+  out->clear();
+  size_t i = 0;
+  size_t j = 0;
+  while (i < a.size() && j < b.size()) {
+    const int x0 = std::max(a[i].x0, b[j].x0);
+    const int x1 = std::min(a[i].x1, b[j].x1);
+    if (x0 < x1) out->push_back({0, x0, x1});
+    (a[i].x1 < b[j].x1 ? i : j) += 1;
+  }
+}
+
+// Appends row y of `a` minus `b` to `out`.
+void AppendDifference(int y, const std::vector<RowRun>& a, const std::vector<RowRun>& b,
+                      std::vector<RowRun>* out) {
+  size_t j = 0;
+  for (const RowRun& run : a) {
+    int x = run.x0;
+    while (j < b.size() && b[j].x1 <= x) ++j;
+    for (size_t k = j; k < b.size() && b[k].x0 < run.x1; ++k) {
+      if (b[k].x0 > x) out->push_back({y, x, b[k].x0});
+      x = std::max(x, b[k].x1);
+    }
+    if (x < run.x1) out->push_back({y, x, run.x1});
+  }
+}
+
+// The band: pixels within kEdgeBandRadius (Chebyshev) of a mask pixel and of
+// a pixel of the image outside the mask, row by row from the mask's runs:
+// the mask grown by the radius (the union of the nearby rows' runs widened)
+// minus the mask shrunk by it (the intersection of the nearby rows' runs
+// narrowed). Outside the image counts as neither, so the image's border is
+// not an outline: a run touching it is not narrowed there, and rows beyond
+// the image do not shrink the mask.
 void CompactBand(const Silhouette& silhouette, CompactSilhouette* out, CompactScratch* scratch) {
   out->band.clear();
   out->band_difference.clear();
-  if (silhouette.bounds.empty()) return;
-  const int margin = kEdgeBandRadius + 1;
-  const cv::Rect image(0, 0, silhouette.mask.cols, silhouette.mask.rows);
-  const cv::Rect roi =
-      (silhouette.bounds + cv::Point(-margin, -margin) + cv::Size(2 * margin, 2 * margin)) & image;
-  const cv::Mat element = cv::getStructuringElement(
-      cv::MORPH_RECT, cv::Size(2 * kEdgeBandRadius + 1, 2 * kEdgeBandRadius + 1));
-  cv::dilate(silhouette.mask(roi), scratch->grown, element);
-  cv::erode(silhouette.mask(roi), scratch->shrunk, element);
-  for (int r = 0; r < roi.height; ++r) {
-    const uint8_t* grown = scratch->grown.ptr<uint8_t>(r);
-    const uint8_t* shrunk = scratch->shrunk.ptr<uint8_t>(r);
-    const size_t first = out->band.size();
-    AppendRuns(
-        roi.y + r, 0, roi.width, [&](int x) { return grown[x] != 0 && shrunk[x] == 0; },
-        &out->band);
-    const uint8_t* difference = silhouette.difference.ptr<uint8_t>(roi.y + r);
-    for (size_t k = first; k < out->band.size(); ++k) {
-      RowRun& run = out->band[k];
-      run.x0 += roi.x;
-      run.x1 += roi.x;
-      out->band_difference.insert(out->band_difference.end(), difference + run.x0,
-                                  difference + run.x1);
+  const std::vector<RowRun>& runs = silhouette.runs;
+  if (runs.empty()) return;
+  const int r = kEdgeBandRadius;
+  const int width = silhouette.mask.cols;
+  const int height = silhouette.mask.rows;
+  std::vector<int>& row_begin = scratch->row_begin;
+  row_begin.assign(static_cast<size_t>(height) + 1, 0);
+  for (const RowRun& run : runs) ++row_begin[static_cast<size_t>(run.y) + 1];
+  for (int y = 0; y < height; ++y) row_begin[y + 1] += row_begin[y];
+  const auto row = [&](int y) {
+    return std::pair{runs.begin() + row_begin[y], runs.begin() + row_begin[y + 1]};
+  };
+  for (int y = std::max(0, runs.front().y - r); y <= std::min(height - 1, runs.back().y + r); ++y) {
+    const int first = std::max(0, y - r);
+    const int last = std::min(height - 1, y + r);
+    scratch->grown.clear();
+    for (int v = first; v <= last; ++v) {
+      for (auto [it, end] = row(v); it != end; ++it) {
+        scratch->grown.push_back({y, std::max(0, it->x0 - r), std::min(width, it->x1 + r)});
+      }
+    }
+    if (scratch->grown.empty()) continue;
+    MergeInPlace(&scratch->grown);
+    scratch->shrunk.clear();
+    for (int v = first; v <= last; ++v) {
+      scratch->next.clear();
+      for (auto [it, end] = row(v); it != end; ++it) {
+        const int x0 = it->x0 == 0 ? 0 : it->x0 + r;
+        const int x1 = it->x1 == width ? width : it->x1 - r;
+        if (x0 < x1) scratch->next.push_back({y, x0, x1});
+      }
+      if (v == first) {
+        scratch->shrunk.swap(scratch->next);
+      } else {
+        Intersect(scratch->shrunk, scratch->next, &scratch->narrowed);
+        scratch->shrunk.swap(scratch->narrowed);
+      }
+      if (scratch->shrunk.empty()) break;
+    }
+    const size_t before = out->band.size();
+    AppendDifference(y, scratch->grown, scratch->shrunk, &out->band);
+    const uint8_t* difference = silhouette.difference.ptr<uint8_t>(y);
+    for (size_t k = before; k < out->band.size(); ++k) {
+      out->band_difference.insert(out->band_difference.end(), difference + out->band[k].x0,
+                                  difference + out->band[k].x1);
     }
   }
 }

@@ -38,10 +38,13 @@ struct CompactSilhouette {
   std::vector<uint8_t> band_difference;  // the difference image over `band`'s pixels, in order
 };
 
-// Scratch images of Compact, kept by the caller so repeated calls allocate nothing.
+// Working memory of Compact, kept by the caller so repeated calls allocate nothing.
 struct CompactScratch {
-  cv::Mat grown;
-  cv::Mat shrunk;
+  std::vector<int> row_begin;  // the mask's first run of each row
+  std::vector<RowRun> grown;   // one row of the mask grown by kEdgeBandRadius
+  std::vector<RowRun> shrunk;  // ... and shrunk by it
+  std::vector<RowRun> next;
+  std::vector<RowRun> narrowed;
 };
 
 // `silhouette` as extracted (mask, labels, difference, bounds and runs filled).

@@ -44,6 +44,10 @@ class LcmBus {
   // Handles messages for up to `timeout_ms`; returns the number handled (0 or 1),
   // or -1 on an LCM error.
   int Handle(int timeout_ms) { return lcm_.handleTimeout(timeout_ms); }
+  // Readable when a message waits: for a loop over several buses (poll()).
+  int FileDescriptor() { return lcm_.getFileno(); }
+  // The provider URL it runs on, the default resolved (ResolveLcmUrl).
+  const std::string& url() const { return url_; }
 
   int64_t Rejected() const { return rejected_.load(); }
   int64_t HandlerErrors() const { return handler_errors_.load(); }
@@ -85,6 +89,7 @@ class LcmBus {
 
   void Reject(const std::string& channel, const std::string& why);
 
+  std::string url_;
   lcm::LCM lcm_;
   std::vector<std::unique_ptr<SubscriptionBase>> subscriptions_;
   std::atomic<int64_t> rejected_{0};
@@ -94,5 +99,9 @@ class LcmBus {
 
 // Microseconds since the Unix epoch, the time base of every LCM message.
 int64_t NowUtime();
+
+// LCM's default provider when `url` is empty: $LCM_DEFAULT_URL, else LCM's
+// own default (udpm://239.255.76.67:7667?ttl=0); `url` itself otherwise.
+std::string ResolveLcmUrl(const std::string& url);
 
 }  // namespace shapesense

@@ -1,7 +1,9 @@
 #include "runtime/lcm/service_loop.h"
 
 #include <malloc.h>
+#include <poll.h>
 
+#include <cerrno>
 #include <chrono>
 #include <csignal>
 #include <thread>
@@ -18,12 +20,24 @@ extern "C" void OnStopSignal(int) { signalled.store(true); }
 
 void RunBusLoop(LcmBus& bus, const std::atomic<bool>& stop, double duration_s,
                 const std::function<void(int64_t now_utime)>& poll) {
+  RunBusLoop(std::vector<LcmBus*>{&bus}, stop, duration_s, poll);
+}
+
+void RunBusLoop(const std::vector<LcmBus*>& buses, const std::atomic<bool>& stop, double duration_s,
+                const std::function<void(int64_t now_utime)>& poll) {
   using Clock = std::chrono::steady_clock;
   const auto end = Clock::now() + std::chrono::duration_cast<Clock::duration>(
                                       std::chrono::duration<double>(duration_s));
+  std::vector<pollfd> waiting(buses.size());
+  for (size_t i = 0; i < buses.size(); ++i) waiting[i] = {buses[i]->FileDescriptor(), POLLIN, 0};
   while (!stop.load() && (duration_s <= 0 || Clock::now() < end)) {
+    const int ready = ::poll(waiting.data(), waiting.size(), 20);
+    bool failed = ready < 0 && errno != EINTR;
+    for (size_t i = 0; ready > 0 && i < buses.size(); ++i) {
+      if ((waiting[i].revents & POLLIN) != 0) failed |= buses[i]->Handle(0) < 0;
+    }
     // An LCM error (e.g. a socket gone) must not turn the loop into a spin.
-    if (bus.Handle(20) < 0) std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    if (failed) std::this_thread::sleep_for(std::chrono::milliseconds(20));
     poll(NowUtime());
   }
 }

@@ -5,6 +5,7 @@
 #include <atomic>
 #include <cstdint>
 #include <functional>
+#include <vector>
 
 #include "runtime/lcm/lcm_bus.h"
 
@@ -14,6 +15,10 @@ namespace shapesense {
 // limit), calling `poll(now_utime)` after every message and at least every
 // 20 ms. Callbacks and `poll` all run on the calling thread.
 void RunBusLoop(LcmBus& bus, const std::atomic<bool>& stop, double duration_s,
+                const std::function<void(int64_t now_utime)>& poll);
+// The same over several buses (a service's main bus and its image buses),
+// each handled as its messages arrive.
+void RunBusLoop(const std::vector<LcmBus*>& buses, const std::atomic<bool>& stop, double duration_s,
                 const std::function<void(int64_t now_utime)>& poll);
 
 // Keeps freed memory in the process instead of returning it to the kernel:

@@ -56,13 +56,13 @@ service_status_t ServiceStatus::Snapshot(int64_t now_utime, int64_t bus_rejected
   return status;
 }
 
-void ServiceStatus::MaybePublish(LcmBus& bus, int64_t now_utime) {
+void ServiceStatus::MaybePublish(LcmBus& bus, int64_t now_utime, int64_t also_rejected) {
   if (last_utime_ > 0 && now_utime - last_utime_ < 1'000'000) return;
-  Publish(bus, now_utime);
+  Publish(bus, now_utime, also_rejected);
 }
 
-void ServiceStatus::Publish(LcmBus& bus, int64_t now_utime) {
-  const service_status_t status = Snapshot(now_utime, bus.Rejected());
+void ServiceStatus::Publish(LcmBus& bus, int64_t now_utime, int64_t also_rejected) {
+  const service_status_t status = Snapshot(now_utime, bus.Rejected() + also_rejected);
   bus.Publish(channels::Status(service_), status);
   std::lock_guard lock(mutex_);
   ++seq_;

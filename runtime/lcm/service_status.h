@@ -28,10 +28,11 @@ class ServiceStatus {
 
   // Publishes when at least a second has passed since the last status;
   // `bus_rejected` adds the bus's count of malformed messages.
-  void MaybePublish(LcmBus& bus, int64_t now_utime);
+  // `also_rejected`: messages that other buses of the service refused.
+  void MaybePublish(LcmBus& bus, int64_t now_utime, int64_t also_rejected = 0);
   // Publishes now, however recent the last status (a service's last status
   // as it stops, so that its final counts reach the network).
-  void Publish(LcmBus& bus, int64_t now_utime);
+  void Publish(LcmBus& bus, int64_t now_utime, int64_t also_rejected = 0);
   // The message as it would be published now (for tests and logs).
   service_status_t Snapshot(int64_t now_utime, int64_t bus_rejected = 0);
 

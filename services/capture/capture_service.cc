@@ -11,6 +11,7 @@
 #include "libs/core/error.h"
 #include "runtime/config_file.h"
 #include "runtime/lcm/channels.h"
+#include "runtime/lcm/image_buses.h"
 #include "runtime/lcm/service_status.h"
 #include "services/capture/image_message.h"
 #include "services/capture/trigger_queue.h"
@@ -28,7 +29,8 @@ constexpr auto kFirstSetWait = std::chrono::milliseconds(2000);
 struct CameraSlot {
   CameraConfig config;
   std::unique_ptr<CameraBackend> backend;
-  std::mutex open_mutex;  // Open and Close against the relay's Trigger
+  LcmBus* image_bus = nullptr;  // its own port on a udpm rig (runtime/lcm/image_buses.h)
+  std::mutex open_mutex;        // Open and Close against the relay's Trigger
   std::atomic<bool> up{false};
   std::atomic<int64_t> missed_triggers{0};  // frame-sets the camera was not triggered for
   TriggerQueue relay{8};
@@ -71,6 +73,7 @@ class CaptureService {
       : args_(args),
         options_(args.options),
         bus_(bus),
+        image_buses_(bus, args.options.cameras.size()),
         compression_(ParseCompression(args.options.compression)),
         log_(args.log ? args.log : LogToStderr),
         started_(static_cast<std::ptrdiff_t>(args.options.cameras.size())) {}
@@ -79,9 +82,9 @@ class CaptureService {
 
  private:
   template <class Message>
-  bool Publish(const std::string& channel, const Message& message) {
+  bool Publish(const std::string& channel, const Message& message, LcmBus* bus = nullptr) {
     std::lock_guard lock(publish_mutex_);
-    return bus_.Publish(channel, message);
+    return (bus != nullptr ? *bus : bus_).Publish(channel, message);
   }
   void MakeSlots();
   bool TryOpen(CameraSlot& slot);
@@ -103,6 +106,9 @@ class CaptureService {
   const CaptureServiceArgs& args_;
   const CaptureServiceOptions& options_;
   LcmBus& bus_;
+  // Camera k of options_.cameras publishes on image bus k: list the cameras
+  // in the rig's order, as the carving service listens in that order.
+  ImageBuses image_buses_;
   const ImageCompression compression_;
   const std::function<void(const std::string&)> log_;
   std::mutex publish_mutex_;
@@ -121,6 +127,7 @@ void CaptureService::MakeSlots() {
   for (const CameraConfig& config : options_.cameras) {
     auto slot = std::make_unique<CameraSlot>();
     slot->config = config;
+    slot->image_bus = &image_buses_.ForCamera(slots_.size());
     slot->backend = args_.make_backend ? args_.make_backend(config, context)
                                        : MakeCameraBackend(config, context);
     slots_.push_back(std::move(slot));
@@ -197,7 +204,7 @@ void CaptureService::PublishFrame(CameraSlot& slot, const CameraFrame& frame) {
   }
   const image_t message = ToImageMessage(slot.config.name, frame, slot.published, NowUtime(),
                                          compression_, options_.png_level);
-  if (!Publish(channels::Image(slot.config.name), message)) {
+  if (!Publish(channels::Image(slot.config.name), message, slot.image_bus)) {
     status_.Error(slot.config.name + ": LCM publish failed");
     return;
   }

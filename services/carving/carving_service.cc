@@ -37,6 +37,7 @@ CarvingService::CarvingService(const CarvingServiceOptions& options, RigSetup se
                                CarvingServiceHooks hooks)
     : options_(options),
       bus_(bus),
+      image_buses_(bus, setup.rig.cameras.size()),
       hooks_(std::move(hooks)),
       stage_(setup.rig, std::move(setup.backgrounds), options.silhouette, options.carving),
       assembler_(CameraNames(setup.rig), options.assembly),
@@ -44,18 +45,47 @@ CarvingService::CarvingService(const CarvingServiceOptions& options, RigSetup se
         if (hooks_.before_carving) hooks_.before_carving(set);
         CarveAndPublish(set);
       }) {
-  bus_.Subscribe<image_t>(
-      channels::kImagePattern,
-      [this](image_t&& image, const std::string& channel, int64_t receive_utime) {
-        OnImage(std::move(image), channel, receive_utime);
-      });
+  SubscribeToImages(CameraNames(stage_.rig()));
 }
 
-void CarvingService::OnImage(image_t&& image, const std::string& channel, int64_t receive_utime) {
+void CarvingService::SubscribeToImages(const std::vector<std::string>& cameras) {
+  if (!HasImageBuses(bus_.url())) {
+    bus_.Subscribe<image_t>(
+        channels::kImagePattern,
+        [this](image_t&& image, const std::string& channel, int64_t receive_utime) {
+          OnImage(std::move(image), channel, "", receive_utime);
+        });
+    return;
+  }
+  for (size_t k = 0; k < cameras.size(); ++k) {
+    image_buses_.ForCamera(k).Subscribe<image_t>(
+        channels::kImagePattern,
+        [this, camera = cameras[k]](image_t&& image, const std::string& channel,
+                                    int64_t receive_utime) {
+          OnImage(std::move(image), channel, camera, receive_utime);
+        });
+  }
+}
+
+std::vector<LcmBus*> CarvingService::Buses() const {
+  std::vector<LcmBus*> buses{&bus_};
+  for (LcmBus* bus : image_buses_.Opened()) buses.push_back(bus);
+  return buses;
+}
+
+void CarvingService::OnImage(image_t&& image, const std::string& channel,
+                             const std::string& camera_of_bus, int64_t receive_utime) {
   status_.Received();
   if (const std::string error = ValidateImageMessage(image); !error.empty()) {
     status_.Rejected();
     status_.Note(error);
+    return;
+  }
+  // Each camera's port carries that camera's images only.
+  if (!camera_of_bus.empty() && image.camera != camera_of_bus) {
+    status_.Rejected();
+    status_.Note(channel + ": image of camera '" + image.camera + "' on camera '" + camera_of_bus +
+                 "''s port");
     return;
   }
   // A camera speaks for itself only: an image naming another camera than
@@ -93,11 +123,15 @@ void CarvingService::Poll(int64_t now_utime) {
   assembler_.Expire(now_utime);
   CountAssemblyDrops(dropped_before);
   status_.SetQueueDepth(worker_.depth());
-  status_.MaybePublish(bus_, now_utime);
+  int64_t images_rejected = 0;
+  for (const LcmBus* bus : image_buses_.Opened()) images_rejected += bus->Rejected();
+  status_.MaybePublish(bus_, now_utime, images_rejected);
 }
 
 service_status_t CarvingService::Status(int64_t now_utime) {
-  return status_.Snapshot(now_utime, bus_.Rejected());
+  int64_t rejected = 0;
+  for (const LcmBus* bus : Buses()) rejected += bus->Rejected();
+  return status_.Snapshot(now_utime, rejected);
 }
 
 void CarvingService::CarveAndPublish(const FrameSet& set) {
@@ -156,7 +190,7 @@ service_status_t RunCarvingService(const ServiceArgs& args, const std::atomic<bo
   CarvingService service(options, std::move(setup), bus);
   log << "shapesense-carving: running on "
       << (options.lcm_url.empty() ? "LCM's default" : options.lcm_url) << '\n';
-  RunBusLoop(bus, stop, args.duration_s, [&](int64_t now) { service.Poll(now); });
+  RunBusLoop(service.Buses(), stop, args.duration_s, [&](int64_t now) { service.Poll(now); });
   return service.Status(NowUtime());
 }
 

@@ -8,10 +8,12 @@
 #include <functional>
 #include <ostream>
 #include <string>
+#include <vector>
 
 #include "libs/carving/carver.h"
 #include "libs/silhouette/silhouette.h"
 #include "runtime/lcm/frame_set_assembler.h"
+#include "runtime/lcm/image_buses.h"
 #include "runtime/lcm/lcm_bus.h"
 #include "runtime/lcm/pipeline_stages.h"
 #include "runtime/lcm/service_main.h"
@@ -78,16 +80,23 @@ class CarvingService {
 
   // The status as it would be published now.
   service_status_t Status(int64_t now_utime);
+  // The buses to handle: the one given and the cameras' image buses
+  // (runtime/lcm/image_buses.h), all on the same thread.
+  std::vector<LcmBus*> Buses() const;
   const AssemblyCounters& assembly() const { return assembler_.counters(); }
 
  private:
-  void OnImage(image_t&& image, const std::string& channel, int64_t receive_utime);
+  void SubscribeToImages(const std::vector<std::string>& cameras);
+  // `camera`: the camera whose bus it came on, or "" on the shared bus.
+  void OnImage(image_t&& image, const std::string& channel, const std::string& camera,
+               int64_t receive_utime);
   void CountAssemblyDrops(int64_t before);
   void CarveAndPublish(const FrameSet& set);
   void MaybePublishSilhouettes(const FrameSet& set);
 
   CarvingServiceOptions options_;
   LcmBus& bus_;
+  ImageBuses image_buses_;
   CarvingServiceHooks hooks_;
   CarvingStage stage_;
   FrameSetAssembler assembler_;  // the bus thread's

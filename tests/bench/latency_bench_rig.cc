@@ -73,7 +73,10 @@ void WriteBenchRig(const BenchRig& bench_rig, const std::filesystem::path& folde
 }
 
 FrameSetPlayer::FrameSetPlayer(BenchRig& bench_rig, const std::string& lcm_url)
-    : rig_(bench_rig), bus_(lcm_url), camera_seq_(bench_rig.rig.cameras.size(), 0) {
+    : rig_(bench_rig),
+      bus_(lcm_url),
+      image_buses_(bus_, bench_rig.rig.cameras.size()),
+      camera_seq_(bench_rig.rig.cameras.size(), 0) {
   for (const Camera& camera : rig_.rig.cameras) channels_.push_back(channels::Image(camera.name));
 }
 
@@ -90,7 +93,7 @@ int64_t FrameSetPlayer::Publish(int64_t trigger_seq) {
     image.stage_times[0].duration_us = 0;
     image.stage_times[0].end_utime = trigger;
     image.header.utime = NowUtime();
-    if (!bus_.Publish(channels_[k], image)) return -1;
+    if (!image_buses_.ForCamera(k).Publish(channels_[k], image)) return -1;
   }
   return trigger;
 }

@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "libs/camera/camera.h"
+#include "runtime/lcm/image_buses.h"
 #include "runtime/lcm/lcm_bus.h"
 #include "shapesense/image_t.hpp"
 
@@ -54,7 +55,8 @@ class FrameSetPlayer {
 
  private:
   BenchRig& rig_;
-  LcmBus bus_;  // publishing only: no subscription, so no receive socket
+  LcmBus bus_;              // publishing only: no subscription, so no receive socket
+  ImageBuses image_buses_;  // each camera on its port, as the capture service publishes
   std::vector<std::string> channels_;
   std::vector<int64_t> camera_seq_;
 };

@@ -117,17 +117,16 @@ class TempFolder {
   fs::path path_;
 };
 
+// The backgrounds only for the carving service: it sends the shape service silhouettes.
 std::vector<std::string> ServiceArgv(const fs::path& program, const std::string& config,
                                      const fs::path& folder, const std::string& url) {
-  return {program.string(),
-          "--config",
-          config,
-          "--rig",
-          (folder / "rig.yaml").string(),
-          "--backgrounds",
-          (folder / "background").string(),
-          "--lcm-url",
-          url};
+  std::vector<std::string> argv = {
+      program.string(), "--config", config, "--rig", (folder / "rig.yaml").string(),
+      "--lcm-url",      url};
+  if (program.filename() == "shapesense-carving") {
+    argv.insert(argv.end(), {"--backgrounds", (folder / "background").string()});
+  }
+  return argv;
 }
 
 // The carving config: the user's, or the defaults with the bench's voxel size.

@@ -13,6 +13,7 @@
 #include "runtime/dataset.h"
 #include "runtime/file_io.h"
 #include "runtime/lcm/channels.h"
+#include "runtime/lcm/image_buses.h"
 #include "services/carving/carving_service.h"
 #include "services/rig_sim/trajectory.h"
 #include "services/shape/shape_service.h"
@@ -222,12 +223,27 @@ std::string LivePipeline::StartServices() {
   return {};
 }
 
+std::vector<fs::path> LivePipeline::ImageLogs(const fs::path& log) const {
+  std::vector<fs::path> logs;
+  for (const Camera& camera : rig_.cameras) {
+    logs.push_back(log.parent_path() / (log.stem().string() + "_" + camera.name + ".lcmlog"));
+  }
+  return logs;
+}
+
 std::string LivePipeline::StartLogger(const fs::path& log) {
-  logger_ = std::make_unique<ChildProcess>(std::vector<std::string>{
-      "/usr/bin/lcm-logger", "--lcm-url=" + ReceiverUrl(), "--force", "--quiet", log.string()});
-  // lcm-logger prints nothing when quiet: wait for its file.
-  if (!recorder_->WaitFor([&] { return fs::exists(log); }, milliseconds(10000))) {
-    return "lcm-logger did not create " + log.string();
+  std::vector<std::pair<std::string, fs::path>> to_log = {{ReceiverUrl(), log}};
+  const std::vector<fs::path> image_logs = ImageLogs(log);
+  for (size_t k = 0; k < image_logs.size(); ++k) {
+    to_log.emplace_back(ImageUrl(ReceiverUrl(), k), image_logs[k]);
+  }
+  for (const auto& [url, path] : to_log) {
+    loggers_.push_back(std::make_unique<ChildProcess>(std::vector<std::string>{
+        "/usr/bin/lcm-logger", "--lcm-url=" + url, "--force", "--quiet", path.string()}));
+    // lcm-logger prints nothing when quiet: wait for its file.
+    if (!recorder_->WaitFor([&] { return fs::exists(path); }, milliseconds(10000))) {
+      return "lcm-logger did not create " + path.string();
+    }
   }
   return {};
 }
@@ -290,13 +306,17 @@ void LivePipeline::Drain(milliseconds quiet) {
 }
 
 std::string LivePipeline::StopAll() {
+  std::vector<std::unique_ptr<ChildProcess>*> in_order = {&capture_};
+  for (auto& logger : loggers_) in_order.push_back(&logger);
+  in_order.insert(in_order.end(), {&shape_, &carving_, &rig_sim_});
   std::string failed;
-  for (auto* process : {&capture_, &logger_, &shape_, &carving_, &rig_sim_}) {
+  for (auto* process : in_order) {
     if (!*process) continue;
     const int status = (*process)->Stop();
     if (status != 0) failed += (failed.empty() ? "" : ", ") + std::to_string(status);
     process->reset();
   }
+  loggers_.clear();
   return failed.empty() ? "" : "exit statuses " + failed;
 }
 

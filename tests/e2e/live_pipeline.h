@@ -111,8 +111,11 @@ class LivePipeline {
   // starts the carving and shape services and waits until both report.
   // Returns "" or what failed.
   std::string StartServices();
-  // Starts lcm-logger on every channel into `log`; "" or what failed.
+  // Starts lcm-logger on every channel of the rig's bus into `log`, and one
+  // per camera's image port into ImageLogs(log); "" or what failed.
   std::string StartLogger(const std::filesystem::path& log);
+  // The image logs StartLogger writes beside `log`: <stem>_<camera>.lcmlog.
+  std::vector<std::filesystem::path> ImageLogs(const std::filesystem::path& log) const;
   // Runs the capture service for `seconds` and waits for it to end; returns
   // "" or what failed. Sets capture_start_utime/capture_end_utime.
   std::string RunCapture(double seconds);
@@ -148,7 +151,7 @@ class LivePipeline {
   std::unique_ptr<ChildProcess> carving_;
   std::unique_ptr<ChildProcess> shape_;
   std::unique_ptr<ChildProcess> capture_;
-  std::unique_ptr<ChildProcess> logger_;
+  std::vector<std::unique_ptr<ChildProcess>> loggers_;
   int64_t capture_start_utime_ = 0;
   int64_t capture_end_utime_ = 0;
 };

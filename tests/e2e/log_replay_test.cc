@@ -65,29 +65,46 @@ TEST(LogReplayTest, ReplayOfTheRecordedRunGivesTheLiveShapesExactly) {
   for (const auto& shape : pipeline.recorder().Shapes()) live[KeyOf(shape.message)] = shape.message;
   ASSERT_GE(live.size(), 0.5 * options.rate_hz * 3.0) << "too few live shapes";
 
-  // The logger recorded every channel, the live shapes among them.
+  // The loggers recorded every channel, the live shapes among them; each
+  // camera's images in the log of its port, and only there.
   const std::map<std::string, int> counts = ChannelCounts(log);
   for (const std::string& channel :
-       {channels::Image("cam0"), channels::Image("cam1"), channels::Image("cam2"),
-        std::string(channels::kVoxels), std::string(channels::kShape),
-        std::string(channels::kTruth), channels::Status("capture"), channels::Status("carving"),
-        channels::Status("shape"), channels::Status("rig_sim")}) {
+       {std::string(channels::kVoxels), std::string(channels::kSilhouettes),
+        std::string(channels::kShape), std::string(channels::kTruth), channels::Status("capture"),
+        channels::Status("carving"), channels::Status("shape"), channels::Status("rig_sim")}) {
     EXPECT_GT(counts.count(channel) ? counts.at(channel) : 0, 0) << channel << " not in the log";
   }
   EXPECT_EQ(ShapesInLog(log).size(), live.size());
+  const std::vector<fs::path> image_logs = pipeline.ImageLogs(log);
+  for (size_t k = 0; k < image_logs.size(); ++k) {
+    const std::string camera = pipeline.rig().cameras[k].name;
+    EXPECT_EQ(counts.count(channels::Image(camera)), 0u) << "images on the rig's port";
+    const std::map<std::string, int> images = ChannelCounts(image_logs[k]);
+    EXPECT_EQ(images.size(), 1u) << image_logs[k] << " holds other channels than its camera's";
+    EXPECT_GT(images.count(channels::Image(camera)) ? images.at(channels::Image(camera)) : 0, 0)
+        << camera << "'s images not in " << image_logs[k];
+  }
 
   const fs::path jsonl = pipeline.dir() / "replay" / "shapes.jsonl";
   const fs::path shapes_log = pipeline.dir() / "replay" / "shapes.lcmlog";
-  ChildProcess replay({E2E_SHAPESENSE, "replay", log.string(), "--out", jsonl.string(), "--out-log",
-                       shapes_log.string(), "--config", pipeline.CarvingConfig().string(),
-                       "--shape-config", pipeline.ShapeConfig().string()});
+  std::vector<std::string> replay_argv = {E2E_SHAPESENSE, "replay"};
+  for (const fs::path& image_log : image_logs) replay_argv.push_back(image_log.string());
+  for (const std::string& arg :
+       {std::string("--out"), jsonl.string(), std::string("--out-log"), shapes_log.string(),
+        std::string("--config"), pipeline.CarvingConfig().string(), std::string("--shape-config"),
+        pipeline.ShapeConfig().string()}) {
+    replay_argv.push_back(arg);
+  }
+  ChildProcess replay(replay_argv);
   // It writes to standard error; its standard output closes when it ends.
   replay.WaitForLine("(nothing)", milliseconds(120000));
   ASSERT_EQ(replay.Stop(), 0) << "shapesense replay failed or did not end within two minutes";
 
   const std::map<Key, shape_t> replayed = ShapesInLog(shapes_log);
+  uintmax_t image_bytes = 0;
+  for (const fs::path& image_log : image_logs) image_bytes += fs::file_size(image_log);
   std::cout << live.size() << " shapes measured live, " << replayed.size() << " replayed from "
-            << fs::file_size(log) / 1000000 << " MB of log\n";
+            << image_bytes / 1000000 << " MB of image logs\n";
   EXPECT_EQ(replayed.size(), live.size());
   int identical = 0;
   for (const auto& [key, shape] : live) {

@@ -11,6 +11,7 @@
 #include <sstream>
 
 #include "runtime/lcm/channels.h"
+#include "runtime/lcm/image_buses.h"
 #include "runtime/lcm/message_convert.h"
 #include "runtime/lcm/silhouette_message.h"
 #include "tests/e2e/live_pipeline.h"
@@ -242,22 +243,25 @@ silhouettes_t SmallSilhouettes(const Rig& rig) {
 // subscribe to; returns how many reached each ({carving, shape}).
 std::pair<int, int> SendMalformed(LcmBus& bus, const Rig& rig) {
   int images = 0, clouds = 0, silhouettes = 0;
-  for (const Camera& rig_camera : rig.cameras) {
-    const std::string& camera = rig_camera.name;
+  ImageBuses image_buses(bus, rig.cameras.size());  // each camera's images on its port
+  for (size_t k = 0; k < rig.cameras.size(); ++k) {
+    const std::string& camera = rig.cameras[k].name;
     const std::string channel = channels::Image(camera);
-    bus.Publish(channel, RawBytes{Garbage(static_cast<uint32_t>(images))});
-    bus.Publish(channel, RawBytes{Truncated(Encode(SmallImage(camera)))});
+    LcmBus& port = image_buses.ForCamera(k);
+    port.Publish(channel, RawBytes{Garbage(static_cast<uint32_t>(images))});
+    port.Publish(channel, RawBytes{Truncated(Encode(SmallImage(camera)))});
     image_t huge = SmallImage(camera);  // 100000 px wide, 48 bytes of pixels
     huge.width = 100000;
-    bus.Publish(channel, huge);
+    port.Publish(channel, huge);
     image_t short_rows = SmallImage(camera);  // rows longer than the image's bytes
     short_rows.height = 480;
-    bus.Publish(channel, short_rows);
+    port.Publish(channel, short_rows);
     const image_t valid = SmallImage(camera);
-    bus.Publish(channel, RawBytes{LyingCount(Encode(valid), valid.data.size())});
+    port.Publish(channel, RawBytes{LyingCount(Encode(valid), valid.data.size())});
     images += 5;
   }
-  bus.Publish(channels::Image("cam9"), SmallImage("cam9"));  // no such camera in the rig
+  // A camera that is not cam0 on cam0's port.
+  image_buses.ForCamera(0).Publish(channels::Image("cam9"), SmallImage("cam9"));
   ++images;
   bus.Publish(channels::kVoxels, RawBytes{Garbage(99)});
   bus.Publish(channels::kVoxels, RawBytes{Truncated(Encode(SmallCloud()))});

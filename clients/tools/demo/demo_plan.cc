@@ -4,6 +4,7 @@
 #include <charconv>
 #include <sstream>
 
+#include "runtime/lcm/image_buses.h"
 #include "runtime/process/private_network.h"
 
 namespace shapesense {
@@ -130,6 +131,16 @@ DemoProcess Logger(const DemoSettings& settings, const DemoPlan& plan) {
   return process;
 }
 
+// The logger of camera k's images, on that camera's port.
+DemoProcess ImageLogger(const DemoSettings& settings, const DemoPlan& plan, size_t k) {
+  return {"lcm-logger-" + settings.camera_names[k],
+          {settings.lcm_logger.string(), "--lcm-url=" + ImageUrl(settings.lcm_url, k), "--force",
+           plan.image_logs[k].string()},
+          "Opening log file",
+          "",
+          false};
+}
+
 std::string SimulatedCaptureConfig(const DemoSettings& settings, const DemoPlan& plan) {
   std::ostringstream out;
   out << "# Written by `shapesense demo`: the virtual rig rendered inside the capture\n"
@@ -166,6 +177,13 @@ DemoPlan MakeDemoPlan(const DemoSettings& settings) {
   plan.rig = work / "rig.yaml";
   plan.backgrounds = work / "background";
   plan.log = settings.out / "pipeline.lcm";
+  if (settings.log_channels.empty() && HasImageBuses(settings.lcm_url)) {
+    for (const std::string& camera : settings.camera_names) {
+      plan.image_logs.push_back(settings.out / ("images_" + camera + ".lcm"));
+    }
+  } else if (settings.log_channels.empty()) {
+    plan.image_logs.push_back(plan.log);  // one bus: the images are in the run's log
+  }
   plan.logs_dir = settings.out / "logs";
   plan.report = settings.out / "report.json";
   plan.replay_shapes = settings.out / "replay_shapes.jsonl";
@@ -178,6 +196,9 @@ DemoPlan MakeDemoPlan(const DemoSettings& settings) {
   plan.background.push_back(CaptureBackground(settings, plan));
   if (gige) plan.pipeline.push_back(RigSim(settings, plan, false));
   plan.pipeline.push_back(Logger(settings, plan));
+  for (size_t k = 0; HasImageBuses(settings.lcm_url) && k < plan.image_logs.size(); ++k) {
+    plan.pipeline.push_back(ImageLogger(settings, plan, k));
+  }
   plan.pipeline.push_back(Service(settings, plan, "carving"));
   plan.pipeline.push_back(Service(settings, plan, "shape"));
   plan.pipeline.push_back(Capture(settings, plan));

@@ -68,7 +68,10 @@ struct DemoPlan {
   std::filesystem::path backgrounds;     // <camera>.png, made by the first phase
   std::filesystem::path capture_config;  // simulated cameras only (empty otherwise)
   std::string capture_config_text;
-  std::filesystem::path log;       // the LCM log of the run
+  std::filesystem::path log;  // the LCM log of the run (every channel but the images)
+  // The cameras' images, one log per camera's port (runtime/lcm/image_buses.h);
+  // none when settings.log_channels picks channels.
+  std::vector<std::filesystem::path> image_logs;
   std::filesystem::path logs_dir;  // one <name>.log per program
   std::filesystem::path report;
   std::filesystem::path replay_shapes;  // the replay's JSON lines

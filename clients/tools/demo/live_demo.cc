@@ -93,7 +93,7 @@ double Measure(const LiveDemoArgs& args, DemoProcesses& processes, LcmBus& bus,
 
 ReplayCheck CheckReplay(const DemoPlan& plan, const DemoScorer& scorer, std::ostream& log) {
   ReplayArgs args;
-  args.log = plan.log;
+  args.logs = plan.image_logs;
   args.out = plan.replay_shapes;
   args.rig = plan.rig;
   args.backgrounds = plan.backgrounds;

@@ -177,8 +177,53 @@ std::pair<CarvingServiceOptions, ShapeServiceOptions> LoadReplayOptions(const Re
   return {carving, shape};
 }
 
-double FractionRead(lcm::LogFile& file, double size) {
-  return size > 0 ? static_cast<double>(std::ftell(file.getFilePtr())) / size : 0.0;
+// Several LCM logs read as one, in the order of their events' times (each
+// log is in time order already).
+class MergedLogs {
+ public:
+  // Throws InputError naming a log that cannot be read.
+  explicit MergedLogs(const std::vector<fs::path>& paths) {
+    if (paths.empty()) throw InputError("replay: expected at least one LCM log");
+    for (const fs::path& path : paths) {
+      std::error_code error;
+      total_size_ += static_cast<double>(fs::file_size(path, error));
+      files_.push_back(std::make_unique<lcm::LogFile>(path.string(), "r"));
+      if (error || !files_.back()->good()) {
+        throw InputError(path.string() + ": cannot be read as an LCM log");
+      }
+      heads_.push_back(files_.back()->readNextEvent());
+    }
+  }
+
+  // The earliest event not yet returned, or nullptr at the end; valid until the next call.
+  const lcm::LogEvent* Next() {
+    if (taken_) heads_[*taken_] = files_[*taken_]->readNextEvent();
+    taken_.reset();
+    for (size_t i = 0; i < heads_.size(); ++i) {
+      if (heads_[i] != nullptr && (!taken_ || heads_[i]->timestamp < heads_[*taken_]->timestamp)) {
+        taken_ = i;
+      }
+    }
+    return taken_ ? heads_[*taken_] : nullptr;
+  }
+
+  double FractionRead() const {
+    double read = 0.0;
+    for (const auto& file : files_) read += static_cast<double>(std::ftell(file->getFilePtr()));
+    return total_size_ > 0 ? read / total_size_ : 0.0;
+  }
+
+ private:
+  std::vector<std::unique_ptr<lcm::LogFile>> files_;
+  std::vector<const lcm::LogEvent*> heads_;
+  std::optional<size_t> taken_;
+  double total_size_ = 0.0;
+};
+
+std::string Joined(const std::vector<fs::path>& paths) {
+  std::string joined;
+  for (const fs::path& path : paths) joined += (joined.empty() ? "" : ", ") + path.string();
+  return joined;
 }
 
 }  // namespace
@@ -187,13 +232,9 @@ ReplaySummary RunReplay(const ReplayArgs& args, std::ostream& log, const ReplayO
   const auto [carving, shape] = LoadReplayOptions(args);
   RigSetup setup = LoadRigSetup(carving.rig, carving.backgrounds);
   std::optional<ConfigurationSetup> configuration = LoadConfigurationSetup(shape);
-  std::error_code error;
-  const double size = static_cast<double>(fs::file_size(args.log, error));
-  lcm::LogFile input(args.log.string(), "r");
-  if (error || !input.good())
-    throw InputError(args.log.string() + ": cannot be read as an LCM log");
+  MergedLogs input(args.logs);
   ShapeWriter writer(args);
-  log << "replay " << args.log.string() << ": " << setup.rig.cameras.size()
+  log << "replay " << Joined(args.logs) << ": " << setup.rig.cameras.size()
       << " cameras, voxel size " << carving.carving.voxel_size << " mm\n";
   ReplayPipeline pipeline(carving, shape, std::move(configuration), std::move(setup), writer,
                           observer, args.progress);
@@ -201,10 +242,10 @@ ReplaySummary RunReplay(const ReplayArgs& args, std::ostream& log, const ReplayO
   const std::regex image_channel(channels::kImagePattern);
   ReplaySummary summary;
   ProgressBar bar("replay", args.progress);
-  while (const lcm::LogEvent* event = input.readNextEvent()) {
+  while (const lcm::LogEvent* event = input.Next()) {
     ++summary.events;
     if (std::regex_match(event->channel, image_channel)) pipeline.OnEvent(*event, &summary);
-    bar.Update(FractionRead(input, size), std::to_string(summary.measured) + " shapes");
+    bar.Update(input.FractionRead(), std::to_string(summary.measured) + " shapes");
   }
   bar.Finish();
   pipeline.Finish(&summary);
@@ -220,8 +261,11 @@ ReplaySummary RunReplay(const ReplayArgs& args, std::ostream& log, const ReplayO
 void AddReplayCommand(CLI::App& app) {
   auto args = std::make_shared<ReplayArgs>();
   CLI::App* command = app.add_subcommand(
-      "replay", "Measure the shapes in a recorded LCM log of camera images, as fast as possible");
-  command->add_option("log", args->log, "LCM log (lcm-logger) with image_t on the camera channels")
+      "replay", "Measure the shapes in recorded LCM logs of camera images, as fast as possible");
+  command
+      ->add_option("logs", args->logs,
+                   "LCM logs (lcm-logger) with image_t on the camera channels: one per camera's "
+                   "port, or one with all")
       ->required();
   command->add_option("--out", args->out, "shapes as JSON lines, as `shapesense offline` writes");
   command->add_option("--out-log", args->out_log, "shapes as a new LCM log of shape_t");

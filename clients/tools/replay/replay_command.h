@@ -1,7 +1,9 @@
 #pragma once
 
-// `shapesense replay LOG`: carving and shape estimation on a recorded LCM
-// log of camera images, as fast as the machine allows. The images go through
+// `shapesense replay LOG...`: carving and shape estimation on recorded LCM
+// logs of camera images, as fast as the machine allows. Each camera's images
+// travel on their own port (runtime/lcm/image_buses.h), so a rig's recording
+// is one log per port; replay merges the logs by receive time. The images go through
 // the same validation, frame-set assembly (with the log's receive times as
 // the clock) and the same CarvingStage and ShapeStage as in the live
 // services, so a frame-set gives the shape the live pipeline gave.
@@ -10,13 +12,16 @@
 #include <filesystem>
 #include <functional>
 #include <ostream>
+#include <vector>
 
 #include "shapesense/shape_t.hpp"
 
 namespace shapesense {
 
 struct ReplayArgs {
-  std::filesystem::path log;      // LCM log with image_t on the camera channels
+  // LCM logs with image_t on the camera channels (one per camera's port, or
+  // one with all), merged by their events' times.
+  std::vector<std::filesystem::path> logs;
   std::filesystem::path out;      // JSON lines as the offline command writes (may be empty)
   std::filesystem::path out_log;  // LCM log of shape_t on the shape channel (may be empty)
   std::filesystem::path
@@ -43,8 +48,8 @@ struct ReplaySummary {
 // Called with every shape as written (for tests and tools).
 using ReplayObserver = std::function<void(const shape_t& shape)>;
 
-// Throws InputError (before writing anything) on a missing or unreadable
-// log, a bad config, rig or backgrounds, or no output given.
+// Throws InputError (before writing anything) on no log, a missing or
+// unreadable one, a bad config, rig or backgrounds, or no output given.
 ReplaySummary RunReplay(const ReplayArgs& args, std::ostream& log,
                         const ReplayObserver& observer = {});
 

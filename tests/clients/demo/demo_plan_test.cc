@@ -13,6 +13,7 @@
 #include <random>
 #include <regex>
 
+#include "runtime/lcm/image_buses.h"
 #include "services/capture/capture_options.h"
 
 namespace shapesense {
@@ -83,7 +84,8 @@ std::vector<std::pair<std::string, std::string>> AravisCameras(
 void ExpectEveryProgramEndsByItself(const DemoPlan& plan, const DemoSettings& settings) {
   for (const auto* list : {&plan.background, &plan.pipeline}) {
     for (const DemoProcess& p : *list) {
-      if (p.name == "lcm-logger" || p.runs_to_end) continue;  // stopped by the demo or by its job
+      // A logger is stopped by the demo, a job ends by itself.
+      if (p.name.rfind("lcm-logger", 0) == 0 || p.runs_to_end) continue;
       EXPECT_GT(std::stod(ValueOf(p.argv, "--duration")), settings.duration_s + 60.0) << p.name;
     }
   }
@@ -139,7 +141,7 @@ TEST(DemoPlanTest, BackgroundsComeFromTheBackdropAloneBeforeThePipeline) {
   }
 }
 
-TEST(DemoPlanTest, EveryProgramOnOneUrlAndTheLoggerFirstTheCaptureLast) {
+TEST(DemoPlanTest, EveryProgramOnTheRigsUrlEachCamerasImagesLoggedOnItsPort) {
   std::mt19937 random(13);
   for (const DemoCameras cameras : {DemoCameras::kGigE, DemoCameras::kSimulated}) {
     DemoSettings settings = RandomSettings(random, cameras);
@@ -150,12 +152,21 @@ TEST(DemoPlanTest, EveryProgramOnOneUrlAndTheLoggerFirstTheCaptureLast) {
     EXPECT_LT(std::find(names.begin(), names.end(), "lcm-logger") - names.begin(),
               std::find(names.begin(), names.end(), "carving") - names.begin());
     EXPECT_EQ(names.back(), "capture");
+    ASSERT_EQ(plan.image_logs.size(), settings.camera_names.size());
+    for (size_t k = 0; k < settings.camera_names.size(); ++k) {
+      const DemoProcess& logger = Find(plan.pipeline, "lcm-logger-" + settings.camera_names[k]);
+      EXPECT_TRUE(Has(logger.argv, "--lcm-url=" + ImageUrl(settings.lcm_url, k)));
+      EXPECT_EQ(logger.argv.back(), plan.image_logs[k].string());
+      EXPECT_LT(std::find(names.begin(), names.end(), logger.name) - names.begin(),
+                std::find(names.begin(), names.end(), "capture") - names.begin());
+    }
     for (const DemoProcess& p : plan.pipeline) {
       if (p.name == "lcm-logger") {
         EXPECT_TRUE(Has(p.argv, "--lcm-url=" + settings.lcm_url));
         EXPECT_EQ(p.argv.back(), plan.log.string());
         continue;
       }
+      if (p.name.rfind("lcm-logger-", 0) == 0) continue;
       EXPECT_EQ(ValueOf(p.argv, "--lcm-url"), settings.lcm_url) << p.name;
       EXPECT_EQ(fs::path(p.argv.front()).parent_path(), settings.bin_dir) << p.name;
     }
@@ -184,6 +195,8 @@ TEST(DemoPlanTest, PlantModeServesThePlantSensesQAndLogsNoImages) {
     }
   }
   for (const DemoProcess& p : plan.background) EXPECT_FALSE(Has(p.argv, "--plant")) << p.name;
+  EXPECT_TRUE(plan.image_logs.empty()) << "no image logger when the channels are picked";
+  for (const DemoProcess& p : plan.pipeline) EXPECT_NE(p.name.rfind("lcm-logger-", 0), 0u);
   const std::regex logged(kControlChannels);
   for (const char* channel :
        {"SHAPESENSE_SHAPE", "SHAPESENSE_TRUTH", "SHAPESENSE_TARGET", "SHAPESENSE_TENDON_COMMAND",

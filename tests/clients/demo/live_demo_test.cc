@@ -125,7 +125,9 @@ TEST_F(LiveDemoTest, AFailingProgramIsNamedWithItsOutputAndEverythingStops) {
   EXPECT_NE(report["failed"].get<std::string>().find("expected 3 cameras"), std::string::npos);
   std::set<std::string> ended;
   for (const nlohmann::json& program : report["programs"]) ended.insert(program["name"]);
-  EXPECT_EQ(ended, (std::set<std::string>{"capture-background", "lcm-logger", "carving", "shape"}))
+  EXPECT_EQ(ended,
+            (std::set<std::string>{"capture-background", "lcm-logger", "lcm-logger-cam0",
+                                   "lcm-logger-cam1", "lcm-logger-cam2", "carving", "shape"}))
       << "started before the failure (side by side), and all stopped";
 }
 

@@ -56,7 +56,7 @@ class ReplayTest : public ::testing::Test {
 
   ReplayArgs Args() const {
     ReplayArgs args;
-    args.log = dir_ / "images.lcmlog";
+    args.logs = {dir_ / "images.lcmlog"};
     args.config = dir_ / "carving.yaml";
     args.shape_config = dir_ / "shape.yaml";
     args.progress = false;
@@ -189,7 +189,7 @@ TEST_F(ReplayTest, BadInputIsRefusedBeforeAnyWork) {
   ReplayArgs args = Args();
   args.out = dir_ / "shapes.jsonl";
   EXPECT_THROW(RunReplay(args, log), InputError);  // no log yet
-  { lcm::LogFile empty(args.log.string(), "w"); }
+  { lcm::LogFile empty(args.logs[0].string(), "w"); }
   ReplayArgs no_output = Args();
   EXPECT_THROW(RunReplay(no_output, log), InputError);
   ReplayArgs no_rig = args;
@@ -202,6 +202,41 @@ TEST_F(ReplayTest, BadInputIsRefusedBeforeAnyWork) {
   const ReplaySummary summary = RunReplay(no_rig, log);
   EXPECT_EQ(summary.events, 0);
   EXPECT_TRUE(fs::exists(args.out));
+  ReplayArgs no_logs = args;
+  no_logs.logs.clear();
+  EXPECT_THROW(RunReplay(no_logs, log), InputError);
+}
+
+// A rig's recording is one log per camera's port (runtime/lcm/image_buses.h):
+// replay merges them by time and measures what one log gives.
+TEST_F(ReplayTest, ImagesSplitOverSeveralLogsGiveTheSameShapes) {
+  constexpr int kSets = 2;
+  const std::map<int64_t, shape_t> live = RunLive(kSets);
+  std::map<std::string, std::unique_ptr<lcm::LogFile>> split;
+  {
+    lcm::LogFile all((dir_ / "images.lcmlog").string(), "r");
+    while (const lcm::LogEvent* event = all.readNextEvent()) {
+      std::unique_ptr<lcm::LogFile>& file = split[event->channel];
+      if (!file) {
+        file = std::make_unique<lcm::LogFile>(
+            (dir_ / ("split" + std::to_string(split.size()) + ".lcmlog")).string(), "w");
+      }
+      lcm::LogEvent copy = *event;
+      ASSERT_EQ(file->writeEvent(&copy), 0);
+    }
+  }
+  ASSERT_EQ(split.size(), 3u);  // one per camera
+  split.clear();                // closes them
+  ReplayArgs args = Args();
+  args.out = dir_ / "split.jsonl";
+  args.logs = {dir_ / "split3.lcmlog", dir_ / "split1.lcmlog", dir_ / "split2.lcmlog"};
+  std::map<int64_t, shape_t> replayed;
+  std::ostringstream log;
+  RunReplay(args, log, [&](const shape_t& s) { replayed[s.trigger_seq] = s; });
+  ASSERT_EQ(replayed.size(), live.size());
+  for (const auto& [seq, shape] : live) {
+    EXPECT_EQ(replayed.at(seq).centerline, shape.centerline) << "frame-set " << seq;
+  }
 }
 
 }  // namespace

@@ -82,7 +82,7 @@ class ReplayConfigurationTest : public ::testing::Test {
 
   ReplayArgs Args() const {
     ReplayArgs args;
-    args.log = dir_ / "images.lcmlog";
+    args.logs = {dir_ / "images.lcmlog"};
     args.config = dir_ / "carving.yaml";
     args.shape_config = dir_ / "shape.yaml";
     args.out = dir_ / "out" / "shapes.jsonl";
