@@ -209,9 +209,18 @@ std::string Validate(const CompactSilhouette& compact) {
 
 void Expand(const CompactSilhouette& compact, Silhouette* out) {
   const cv::Size size(compact.width, compact.height);
+  // An earlier expansion into `out` wrote only within its bounds and the band
+  // around them: clearing that is enough (a tenth of the image, typically).
+  const bool reused = out->mask.size() == size && out->labels.size() == size &&
+                      out->difference.size() == size && out->mask.type() == CV_8U;
+  const int margin = kEdgeBandRadius + 1;
+  const cv::Rect written =
+      reused ? (out->bounds + cv::Point(-margin, -margin) + cv::Size(2 * margin, 2 * margin)) &
+                   cv::Rect(cv::Point(), size)
+             : cv::Rect(cv::Point(), size);
   for (cv::Mat* image : {&out->mask, &out->labels, &out->difference}) {
     image->create(size, CV_8U);
-    image->setTo(0);
+    (*image)(written).setTo(0);
   }
   Fill(out->mask, compact.mask, 255);
   Fill(out->labels, compact.mask, kLabelBody);

@@ -56,7 +56,9 @@ void Compact(const Silhouette& silhouette, CompactSilhouette* out, CompactScratc
 std::string Validate(const CompactSilhouette& compact);
 
 // The silhouette back, at full size; `compact` must pass Validate. The
-// buffers of `out` are reused.
+// buffers of `out` are reused: `out` must be empty or an earlier Expand's,
+// which wrote only near its mask, so only that part is cleared (an
+// extracted silhouette's difference image covers the whole image).
 void Expand(const CompactSilhouette& compact, Silhouette* out);
 
 }  // namespace shapesense

@@ -17,6 +17,7 @@
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
+#include <ctime>
 #include <filesystem>
 #include <fstream>
 #include <map>
@@ -28,6 +29,7 @@
 
 #include "runtime/lcm/channels.h"
 #include "runtime/lcm/lcm_bus.h"
+#include "runtime/lcm/pipeline_stages.h"
 #include "runtime/process/child_process.h"
 #include "runtime/process/private_network.h"
 #include "tests/bench/latency_bench_rig.h"
@@ -195,6 +197,7 @@ struct StepResult {
   Counters carving, shape;  // the step's share of the services' counters
   bool status_fresh = false;
   std::map<int, ProcessProbe> probe_before, probe_after;  // by pid
+  double in_process_ms = 0.0;  // CPU of the same chain in one thread, per frame-set
 
   int64_t Missing() const { return sent - static_cast<int64_t>(shapes.size()); }
   bool PlayerKeptUp() const { return achieved_hz >= 0.97 * rate_hz && publish_failures == 0; }
@@ -240,10 +243,11 @@ void Drain(const PipelineListener& listener, StepResult* result) {
   for (const ShapeSample& shape : result->shapes) result->invalid_shapes += shape.valid ? 0 : 1;
 }
 
-StepResult RunStep(FrameSetPlayer& player, const PipelineListener& listener, double rate_hz,
-                   double seconds, int64_t* next_seq) {
+StepResult RunStep(FrameSetPlayer& player, const PipelineListener& listener, double in_process_ms,
+                   double rate_hz, double seconds, int64_t* next_seq) {
   StepResult result;
   result.rate_hz = rate_hz;
+  result.in_process_ms = in_process_ms;
   result.first_seq = *next_seq;
   const ServiceSnapshot before = Snapshot(listener);
   result.probe_before = ProbeProcesses(kLcmPort);
@@ -277,6 +281,18 @@ void PrintCounters(const char* service, const Counters& c, const char* received_
       c.last_error.empty() ? "" : "; last: ", c.last_error.c_str());
 }
 
+// CPU per frame-set of the carving and shape services together over the step.
+double ServicesCpuMs(const StepResult& r) {
+  double ms = 0.0;
+  for (const auto& [pid, after] : r.probe_after) {
+    const auto before = r.probe_before.find(pid);
+    if (before == r.probe_before.end() || after.name.rfind("shapesense-", 0) != 0) continue;
+    ms += 1e3 * (after.cpu_seconds - before->second.cpu_seconds) /
+          static_cast<double>(std::max<int64_t>(r.sent, 1));
+  }
+  return ms;
+}
+
 // CPU per frame-set and receive-socket drops of each process over the step.
 void PrintProcesses(const StepResult& r) {
   std::string cpu, drops;
@@ -297,6 +313,12 @@ void PrintProcesses(const StepResult& r) {
   const unsigned cores = std::max(1u, std::thread::hardware_concurrency());
   std::printf("         CPU ms per frame-set: %s; all %.2f (%u cores: at most %.0f sets/s)\n",
               cpu.c_str(), total_ms, cores, total_ms > 0 ? cores * 1e3 / total_ms : 0.0);
+  const double services_ms = ServicesCpuMs(r);
+  if (r.in_process_ms > 0 && services_ms > 0) {
+    std::printf(
+        "         the services (carving + shape) %.2f ms: %.2f x the chain in one thread (%.2f)\n",
+        services_ms, services_ms / r.in_process_ms, r.in_process_ms);
+  }
   std::printf(
       "         datagrams dropped at the receive sockets (buffer full): %s; images lost "
       "before the carving service's handler: %lld\n",
@@ -373,6 +395,45 @@ BenchRig Prepare(const BenchOptions& options) {
   return rig;
 }
 
+double ThreadCpuSeconds() {
+  timespec now{};
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &now);
+  return static_cast<double>(now.tv_sec) + 1e-9 * static_cast<double>(now.tv_nsec);
+}
+
+// The yardstick of the services' cost: the same chain on the same frame-sets
+// in one thread (CarvingStage, then ShapeStage on its compact silhouettes,
+// default options and the bench's voxel size), CPU ms per frame-set over
+// three passes after a warm-up one.
+double InProcessCpuMs(const BenchRig& rig, const BenchOptions& options) {
+  CarvingOptions carving;
+  carving.voxel_size = options.voxel_size;
+  const CarvingStage carving_stage(rig.rig, rig.backgrounds, SilhouetteOptions{}, carving);
+  const ShapeStage shape_stage(rig.rig, ShapeOptions{});
+  std::vector<FrameSet> sets(rig.frame_sets.size());
+  for (size_t i = 0; i < sets.size(); ++i) {
+    sets[i].trigger_seq = static_cast<int64_t>(i);
+    sets[i].images = rig.frame_sets[i];
+  }
+  CarvingOutput carved;
+  ShapeOutput shaped;
+  const auto pass = [&] {
+    for (const FrameSet& set : sets) {
+      if (carving_stage.Process(set, &carved).empty()) {
+        shape_stage.Process(carved.message, &carved.silhouettes_message, &shaped);
+      }
+    }
+  };
+  pass();
+  constexpr int kPasses = 3;
+  const double start = ThreadCpuSeconds();
+  for (int i = 0; i < kPasses; ++i) pass();
+  const double ms = 1e3 * (ThreadCpuSeconds() - start) / static_cast<double>(kPasses * sets.size());
+  std::printf("The same chain in one thread on these frame-sets: %.2f ms CPU per frame-set%s\n", ms,
+              options.carving_config.empty() ? "" : " (default carving options)");
+  return ms;
+}
+
 // Ramps the rate from rates[1] until a step is not clean; returns the highest clean rate.
 double Ramp(const BenchOptions& options, FrameSetPlayer& player, const PipelineListener& listener,
             const StepResult& first, int64_t* next_seq) {
@@ -381,8 +442,8 @@ double Ramp(const BenchOptions& options, FrameSetPlayer& player, const PipelineL
   if (!first.Clean() || !first.PlayerKeptUp()) return 0.0;
   double sustained = first.rate_hz;
   for (size_t i = 1; i < options.rates.size(); ++i) {
-    const StepResult step =
-        RunStep(player, listener, options.rates[i], options.step_seconds, next_seq);
+    const StepResult step = RunStep(player, listener, first.in_process_ms, options.rates[i],
+                                    options.step_seconds, next_seq);
     PrintStepLine(step, true);
     const bool stop = !step.Clean() || !step.PlayerKeptUp();
     if (options.details || stop) {
@@ -445,6 +506,7 @@ int Run(const BenchOptions& options, const std::string& network_error) {
   if (options.rates.empty()) throw std::invalid_argument("--rates: expected at least one rate");
   const std::string receive_url = PrintSetup(options, network_error);
   BenchRig rig = Prepare(options);
+  const double in_process_ms = InProcessCpuMs(rig, options);
   const TempFolder folder;
   WriteBenchRig(rig, folder.path());
   PipelineListener listener(receive_url);
@@ -458,9 +520,10 @@ int Run(const BenchOptions& options, const std::string& network_error) {
   }
   FrameSetPlayer player(rig, kLcmUrl);
   int64_t next_seq = 0;
-  RunStep(player, listener, options.rates.front(), 1.0, &next_seq);  // warm-up, not counted
-  const StepResult first =
-      RunStep(player, listener, options.rates.front(), options.first_seconds, &next_seq);
+  // warm-up, not counted
+  RunStep(player, listener, in_process_ms, options.rates.front(), 1.0, &next_seq);
+  const StepResult first = RunStep(player, listener, in_process_ms, options.rates.front(),
+                                   options.first_seconds, &next_seq);
   PrintDetailedStep(first, options.target_p99_ms);
   std::printf("\nStepping the rate up (%.1f s a step; d/e: the service's drops / errors):",
               options.step_seconds);

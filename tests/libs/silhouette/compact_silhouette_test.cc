@@ -97,6 +97,20 @@ TEST(CompactSilhouetteTest, KeepsTheDifferenceExactlyOnTheBandAndNothingElse) {
   }
 }
 
+TEST(CompactSilhouetteTest, ExpandingIntoAnEarlierExpansionLeavesNothingOfIt) {
+  const std::vector<FrameSpec> specs = Specs();
+  Silhouette reused;
+  for (size_t i = 0; i < specs.size(); ++i) {
+    const CompactSilhouette compact = CompactOf(Extracted(specs[i]));
+    Expand(compact, &reused);
+    Silhouette fresh;
+    Expand(compact, &fresh);
+    EXPECT_TRUE(SameImage(reused.mask, fresh.mask)) << i;
+    EXPECT_TRUE(SameImage(reused.labels, fresh.labels)) << i;
+    EXPECT_TRUE(SameImage(reused.difference, fresh.difference)) << i;
+  }
+}
+
 TEST(CompactSilhouetteTest, AVgaFrameFitsWellInOneDatagram) {
   FrameSpec spec;  // 640x480, a long curved tube with tape
   const CompactSilhouette compact = CompactOf(Extracted(spec));
