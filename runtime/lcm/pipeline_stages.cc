@@ -100,7 +100,7 @@ std::string DecodeFrameSet(const FrameSet& set, const Rig& rig, std::vector<cv::
              std::to_string(camera.height) + " (the rig's), got " + std::to_string(image.width) +
              "x" + std::to_string(image.height);
     }
-    const std::string error = ImageMessageToBgr(image, &(*images)[i], ImageCopy::kViewWhenPossible);
+    std::string error = ImageMessageToBgr(image, &(*images)[i], ImageCopy::kViewWhenPossible);
     if (!error.empty()) return error;
   }
   return {};

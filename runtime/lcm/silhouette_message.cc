@@ -96,7 +96,7 @@ std::string SilhouettesFromMessage(const silhouettes_t& message, const Rig& rig,
   }
   compact->resize(rig.cameras.size());
   for (size_t k = 0; k < rig.cameras.size(); ++k) {
-    const std::string error = ViewFromMessage(message.views[k], rig.cameras[k], &(*compact)[k]);
+    std::string error = ViewFromMessage(message.views[k], rig.cameras[k], &(*compact)[k]);
     if (!error.empty()) return error;
   }
   return {};

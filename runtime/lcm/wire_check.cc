@@ -58,7 +58,8 @@ class WireWalker {
   // Three parallel int16 arrays of runs (row, begin, end).
   bool Runs() {
     int64_t count = 0;
-    return Count(&count) && SkipArray(count, 3 * 2);
+    constexpr size_t kRunBytes = 3 * sizeof(int16_t);
+    return Count(&count) && SkipArray(count, kRunBytes);
   }
   bool AtEnd() const { return pos_ == size_; }
 

@@ -265,6 +265,7 @@ StepResult RunStep(FrameSetPlayer& player, const PipelineListener& listener, dou
 
 std::vector<double> TotalsMs(const std::vector<ShapeSample>& shapes) {
   std::vector<double> totals;
+  totals.reserve(shapes.size());
   for (const ShapeSample& s : shapes) {
     totals.push_back(static_cast<double>(s.receive_utime - s.trigger_utime) * 1e-3);
   }
@@ -496,7 +497,7 @@ std::string PrintSetup(const BenchOptions& options, const std::string& network_e
     std::printf("Priority: nice %d%s\n", options.nice, set ? "" : " refused (no privilege)");
   }
   if (options.tune_malloc) std::printf("Services: glibc malloc tuned (--tune-malloc)\n");
-  const std::string receive_url =
+  std::string receive_url =
       std::string(kLcmUrl) + "&recv_buf_size=" + std::to_string(options.recv_buf_size);
   std::printf("LCM: %s (publisher: %s)\n", receive_url.c_str(), kLcmUrl);
   return receive_url;

@@ -157,7 +157,7 @@ fs::path LivePipeline::WriteSmallerRig() const {
   rig.focal_px *= static_cast<double>(options_.image_width) / rig.image_width;
   rig.image_width = options_.image_width;
   rig.image_height = options_.image_height;
-  const fs::path path = dir_ / "synthetic_rig.yaml";
+  fs::path path = dir_ / "synthetic_rig.yaml";
   WriteFileAtomically(path, FormatRigYaml(MakeSyntheticRig(rig)));
   return path;
 }
@@ -237,9 +237,11 @@ std::string LivePipeline::StartLogger(const fs::path& log) {
   for (size_t k = 0; k < image_logs.size(); ++k) {
     to_log.emplace_back(ImageUrl(ReceiverUrl(), k), image_logs[k]);
   }
-  for (const auto& [url, path] : to_log) {
-    loggers_.push_back(std::make_unique<ChildProcess>(std::vector<std::string>{
-        "/usr/bin/lcm-logger", "--lcm-url=" + url, "--force", "--quiet", path.string()}));
+  for (const auto& url_and_log : to_log) {
+    const fs::path& path = url_and_log.second;
+    loggers_.push_back(std::make_unique<ChildProcess>(
+        std::vector<std::string>{"/usr/bin/lcm-logger", "--lcm-url=" + url_and_log.first, "--force",
+                                 "--quiet", path.string()}));
     // lcm-logger prints nothing when quiet: wait for its file.
     if (!recorder_->WaitFor([&] { return fs::exists(path); }, milliseconds(10000))) {
       return "lcm-logger did not create " + path.string();

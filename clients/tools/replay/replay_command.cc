@@ -98,7 +98,7 @@ class ReplayPipeline {
   ReplayPipeline(const CarvingServiceOptions& carving, const ShapeServiceOptions& shape,
                  std::optional<ConfigurationSetup> configuration, RigSetup setup,
                  ShapeWriter& writer, const ReplayObserver& observer, bool progress)
-      : carving_stage_(setup.rig, setup.backgrounds, carving.silhouette, carving.carving,
+      : carving_stage_(setup.rig, std::move(setup.backgrounds), carving.silhouette, carving.carving,
                        TableProgress(progress)),
         shape_stage_(setup.rig, shape.shape, std::move(configuration)),
         assembler_(CameraNames(setup.rig), carving.assembly),

@@ -121,7 +121,7 @@ TEST_F(CarvingServiceTest, MalformedImagesAreRejectedAndCountedAndNeverStopIt) {
   for (size_t b = 0; b < 4; ++b) huge_count.at(stage_count + b) = 0x7F;
   bus_.Publish(channel, RawBytes{huge_count});
   // Decodable but malformed: sizes, formats, strides, no camera.
-  for (auto mutate : std::vector<std::function<void(image_t*)>>{
+  for (const auto& mutate : std::vector<std::function<void(image_t*)>>{
            [](image_t* m) { m->width = 1000; }, [](image_t* m) { m->pixel_format = 77; },
            [](image_t* m) { m->row_stride = 5; }, [](image_t* m) { m->camera.clear(); },
            [](image_t* m) { m->compression = image_t::COMPRESSION_JPEG; }}) {

@@ -185,7 +185,7 @@ TEST_F(ShapeServiceTest, MalformedMessagesOnEveryChannelAreCountedAndNeverStopIt
   bus_.Publish(channels::kVoxels, RawBytes{huge});
   rejected += 4;
   // ... and decodable nonsense, rejected by the worker.
-  for (auto mutate : std::vector<std::function<void(voxel_cloud_t*)>>{
+  for (const auto& mutate : std::vector<std::function<void(voxel_cloud_t*)>>{
            [](voxel_cloud_t* m) { m->dims[2] = 0; }, [](voxel_cloud_t* m) { m->voxel_size = 0; },
            [](voxel_cloud_t* m) { m->voxels.back() = 1 << 30; },
            [](voxel_cloud_t* m) { m->voxels[1] = m->voxels[0]; }}) {
