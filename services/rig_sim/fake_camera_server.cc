@@ -75,6 +75,10 @@ struct FakeCameraServer::Slot {
   int64_t seen_fills = 0;
   int64_t fills = 0;
   int64_t exposures = 0;  // frames made; the block id is its 16-bit form
+  // The last image sent, for the repeat fault (the camera's thread only).
+  std::vector<uint8_t> last_image;
+  int64_t last_frame_id = 0;
+  int64_t last_exposure_utime = 0;
 };
 
 namespace {
@@ -357,6 +361,27 @@ void FakeCameraServer::DelayAnswer() {
   std::this_thread::sleep_for(std::chrono::duration<double, std::milli>(delay_ms));
 }
 
+// The repeat fault: whether this trigger gets the camera's previous image
+// again (there is one of this size).
+bool FakeCameraServer::RepeatsLastImage(const Slot& slot, size_t size) {
+  if (slot.last_frame_id == 0 || slot.last_image.size() != size) return false;
+  std::lock_guard lock(mutex_);
+  return faults_.repeat_ratio > 0.0 &&
+         std::bernoulli_distribution(faults_.repeat_ratio)(fault_random_);
+}
+
+void FakeCameraServer::KeepForRepeats(Slot& slot, const void* data, size_t size,
+                                      const Stamp& stamp) {
+  {
+    std::lock_guard lock(mutex_);
+    if (faults_.repeat_ratio <= 0.0) return;
+  }
+  const auto* bytes = static_cast<const uint8_t*>(data);
+  slot.last_image.assign(bytes, bytes + size);
+  slot.last_frame_id = stamp.frame_id;
+  slot.last_exposure_utime = stamp.exposure_utime;
+}
+
 // Never throws: it runs inside Aravis's C thread. An image it cannot make is
 // sent black and counted.
 FakeCameraServer::Stamp FakeCameraServer::Fill(int camera, void* data, int width, int height,
@@ -374,6 +399,10 @@ FakeCameraServer::Stamp FakeCameraServer::Fill(int camera, void* data, int width
     ++slot.fills;
   }
   const int64_t exposure_utime = seen > 0 && seen <= now ? seen : now;
+  if (RepeatsLastImage(slot, size)) {
+    std::memcpy(data, slot.last_image.data(), size);
+    return {slot.last_frame_id, slot.last_exposure_utime};
+  }
   Stamp stamp{0, exposure_utime};
   try {
     const CameraExposure exposure = Expose(camera, exposure_utime);
@@ -381,6 +410,7 @@ FakeCameraServer::Stamp FakeCameraServer::Fill(int camera, void* data, int width
     const cv::Mat view = RenderOnWorker(exposure);
     if (EncodeRawImage(view, pixel_format, width, height, static_cast<uint8_t*>(data), size)) {
       ++images_served_;
+      KeepForRepeats(slot, data, size, stamp);
       DelayAnswer();
       return stamp;
     }

@@ -19,7 +19,8 @@
 //
 // Faults for tests (SetFaults): images answered late, by a random delay
 // after their exposure (the camera misses the triggers that come meanwhile),
-// and triggers missed at random.
+// triggers missed at random, and triggers answered with the previous image
+// again (a stale buffer re-sent: same frame id, stamp and pixels).
 
 #include <atomic>
 #include <condition_variable>
@@ -54,6 +55,10 @@ struct CameraExposure {
 struct CameraFaults {
   double answer_delay_max_ms = 0.0;  // each image sent 0 to this long after its exposure
   double miss_ratio = 0.0;           // fraction of triggers the cameras miss
+  // Fraction of triggers a camera answers with its previous image again (the
+  // same frame id, exposure stamp and pixels), as a camera re-sending a
+  // stale buffer: one image answering two triggers.
+  double repeat_ratio = 0.0;
   uint32_t seed = 1;
 };
 
@@ -120,6 +125,8 @@ class FakeCameraServer {
   cv::Mat RenderOnWorker(const CameraExposure& exposure);
   void RenderJobs();
   void DelayAnswer();
+  bool RepeatsLastImage(const Slot& slot, size_t size);
+  void KeepForRepeats(Slot& slot, const void* data, size_t size, const Stamp& stamp);
 
   const Rig rig_;
   const TrajectoryOptions trajectory_;

@@ -54,6 +54,8 @@ int main(int argc, char** argv) {
                  "fault: each image sent up to this long after its exposure (misses triggers)");
   app.add_option("--miss-ratio", args.faults.miss_ratio,
                  "fault: fraction of triggers missed (0-1)");
+  app.add_option("--repeat-ratio", args.faults.repeat_ratio,
+                 "fault: fraction of triggers answered with the previous image again (0-1)");
   app.add_option("--outage", args.outages, "CAMERA:START_S:DURATION_S, a camera off the network");
   app.add_option("--fault-camera", args.fault_camera, "camera SIGUSR1 stops, SIGUSR2 restarts");
   app.add_flag("--backdrop-only", args.backdrop_only, "no manipulator, no truth (backgrounds)");

@@ -73,6 +73,10 @@ Setup LoadSetup(const RigSimArgs& args) {
     throw InputError("--miss-ratio: expected a fraction in [0, 1), got " +
                      std::to_string(args.faults.miss_ratio));
   }
+  if (!(args.faults.repeat_ratio >= 0.0 && args.faults.repeat_ratio < 1.0)) {
+    throw InputError("--repeat-ratio: expected a fraction in [0, 1), got " +
+                     std::to_string(args.faults.repeat_ratio));
+  }
   if (!(args.duration_s >= 0.0)) {
     throw InputError("--duration: expected seconds >= 0, got " + std::to_string(args.duration_s));
   }

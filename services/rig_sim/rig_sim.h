@@ -13,7 +13,8 @@
 // published on channels::kPlantState; the truth carries the plant's q.
 //
 // Faults for tests: a ratio of lost stream packets (--packet-loss), images
-// answered late (--answer-delay-ms) and triggers missed (--miss-ratio), and a
+// answered late (--answer-delay-ms), triggers missed (--miss-ratio) or
+// answered with the previous image again (--repeat-ratio), and a
 // camera taken off the network and brought back, on a schedule (--outage) or
 // on request (SIGUSR1 stops the fault camera, SIGUSR2 starts it again).
 

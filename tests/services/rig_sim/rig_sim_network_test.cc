@@ -145,6 +145,31 @@ TEST_F(RigSimNetworkTest, MissedTriggersMakeNoExposure) {
   EXPECT_EQ(cameras[0]->Stats().unmatched_frames, 0);
 }
 
+// A trigger answered with the previous image again (the same block id and
+// stamp) never passes for an image of that trigger: Aravis's stream or the
+// backend's matcher drops it, and the trigger goes unanswered.
+TEST_F(RigSimNetworkTest, AStaleImageReSentNeverAnswersALaterTrigger) {
+  const Rig rig = MakeSyntheticRig(SyntheticRigOptions{});
+  FakeCameraServer server(rig, TrajectoryOptions{}, {"127.0.0.1", "127.0.0.2", "127.0.0.3"}, 6,
+                          NowUtime());
+  server.Start(0);
+  auto cameras = OpenCameras({"RGB8"});
+  CameraFaults faults;
+  faults.repeat_ratio = 0.999;
+  server.SetFaults(faults);
+  ASSERT_TRUE(TriggerSet(cameras, 0)[0].has_value());  // kept for the repeats
+  int answered = 0;
+  for (int64_t seq = 1; seq <= 8; ++seq) {
+    const std::optional<CameraFrame> frame = TriggerSet(cameras, seq, milliseconds(300))[0];
+    if (!frame) continue;
+    ++answered;
+    EXPECT_EQ(frame->trigger_seq, seq) << "an image answers its own trigger";
+    EXPECT_NE(frame->frame_id, 1) << "the stale image was taken for a new one";
+  }
+  EXPECT_LE(answered, 4) << "the fault repeated too few images";
+  EXPECT_EQ(server.images_served(), 1 + answered) << "a repeat is no new exposure";
+}
+
 // The tube's pixels: much less green than the backdrop.
 int TubePixels(const cv::Mat& bgr) {
   cv::Mat green;
