@@ -15,12 +15,13 @@ std::atomic<bool> g_stop{false};
 shapesense::RigSimControl g_control;
 
 void OnSignal(int signal) {
-  if (signal == SIGUSR1)
+  if (signal == SIGUSR1) {
     g_control.stop_fault_camera = true;
-  else if (signal == SIGUSR2)
+  } else if (signal == SIGUSR2) {
     g_control.start_fault_camera = true;
-  else
+  } else {
     g_stop = true;
+  }
 }
 
 // The cameras' images are rendered several times a second on threads of
