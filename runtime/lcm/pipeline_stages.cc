@@ -49,14 +49,14 @@ void ExtractAll(const SilhouetteExtractor& extractor, const std::vector<cv::Mat>
                 CarvingOutput* out) {
   const size_t n = out->images.size();
   out->silhouettes.resize(n);
-  out->compact.resize(n);
+  out->compact.views.resize(n);
   for (size_t i = 0; i < n; ++i) {
     extractor.Extract(out->images[i], backgrounds[i], &out->silhouettes[i]);
-    Compact(out->silhouettes[i], &out->compact[i], &out->compact_scratch);
+    Compact(out->silhouettes[i], &out->compact.views[i], &out->compact_scratch);
   }
 }
 
-bool SameFrameSet(const voxel_cloud_t& voxels, const silhouettes_t& silhouettes) {
+bool SameFrameSet(const voxel_cloud_t& voxels, const SilhouetteSet& silhouettes) {
   return voxels.trigger_seq == silhouettes.trigger_seq &&
          voxels.trigger_utime == silhouettes.trigger_utime;
 }
@@ -147,9 +147,9 @@ std::string CarvingStage::Process(const FrameSet& set, CarvingOutput* out) const
   out->message.stage_times.push_back(MakeStageTime("carving", carving_us, NowUtime()));
   out->message.num_stage_times = static_cast<int32_t>(out->message.stage_times.size());
 
+  out->compact.trigger_seq = set.trigger_seq;
+  out->compact.trigger_utime = set.trigger_utime;
   SilhouettesToMessage(rig_, out->compact, &out->silhouettes_message);
-  out->silhouettes_message.trigger_seq = set.trigger_seq;
-  out->silhouettes_message.trigger_utime = set.trigger_utime;
   return {};
 }
 
@@ -160,15 +160,16 @@ ShapeStage::ShapeStage(const Rig& rig, const ShapeOptions& shape,
       estimator_(rig, shape),
       configuration_(CheckedConfiguration(std::move(configuration))) {}
 
-std::string ShapeStage::ExpandSilhouettes(const voxel_cloud_t& voxels, const silhouettes_t* message,
+std::string ShapeStage::ExpandSilhouettes(const voxel_cloud_t& voxels, const SilhouetteSet* set,
                                           ShapeOutput* out) const {
-  if (message == nullptr) return "none";
-  if (!SameFrameSet(voxels, *message)) return "of another frame-set";
-  if (std::string error = SilhouettesFromMessage(*message, rig_, &out->compact); !error.empty()) {
-    return error;
+  if (set == nullptr) return "none";
+  if (!SameFrameSet(voxels, *set)) return "of another frame-set";
+  if (set->views.size() != rig_.cameras.size()) {
+    return "expected " + std::to_string(rig_.cameras.size()) + " views, got " +
+           std::to_string(set->views.size());
   }
-  out->silhouettes.resize(out->compact.size());
-  for (size_t k = 0; k < out->compact.size(); ++k) Expand(out->compact[k], &out->silhouettes[k]);
+  out->silhouettes.resize(set->views.size());
+  for (size_t k = 0; k < set->views.size(); ++k) Expand(set->views[k], &out->silhouettes[k]);
   return {};
 }
 
@@ -185,7 +186,7 @@ void ShapeStage::SenseConfigurationOf(ShapeOutput* out) const {
                          configuration_->geometry, configuration_->options);
 }
 
-std::string ShapeStage::Process(const voxel_cloud_t& voxels, const silhouettes_t* silhouettes,
+std::string ShapeStage::Process(const voxel_cloud_t& voxels, const SilhouetteSet* silhouettes,
                                 ShapeOutput* out) const {
   if (std::string error = VoxelCloudFromMessage(voxels, &out->cloud); !error.empty()) return error;
   const auto start = Clock::now();

@@ -15,10 +15,10 @@
 #include "libs/carving/carver.h"
 #include "libs/centerline/shape_estimator.h"
 #include "libs/mechanics/configuration_sensing.h"
-#include "libs/silhouette/compact_silhouette.h"
 #include "libs/silhouette/silhouette.h"
 #include "runtime/config_file.h"
 #include "runtime/lcm/frame_set_assembler.h"
+#include "runtime/lcm/silhouette_message.h"
 #include "shapesense/shape_t.hpp"
 #include "shapesense/silhouettes_t.hpp"
 #include "shapesense/voxel_cloud_t.hpp"
@@ -52,11 +52,11 @@ std::vector<stage_time_t> FrameSetStageTimes(const FrameSet& set);
 // What CarvingStage produces; kept between frame-sets so buffers are reused.
 struct CarvingOutput {
   voxel_cloud_t message;  // trigger, grid, voxels, stage times; the header is the publisher's
-  // The silhouettes compacted for the shape stage: trigger and views; the
-  // header is the publisher's.
+  // The silhouettes compacted for the shape stage, and as the message that
+  // carries them (its header is the publisher's).
+  SilhouetteSet compact;
   silhouettes_t silhouettes_message;
   std::vector<Silhouette> silhouettes;
-  std::vector<CompactSilhouette> compact;
   CompactScratch compact_scratch;
   std::vector<cv::Mat> images;
   VoxelCloud cloud;
@@ -102,8 +102,7 @@ struct ShapeOutput {
   // Set when the shape was measured without the silhouettes it should have
   // had (they were missing or malformed): the reason.
   std::string warning;
-  std::vector<CompactSilhouette> compact;
-  std::vector<Silhouette> silhouettes;  // expanded from `compact`
+  std::vector<Silhouette> silhouettes;  // expanded from the set's compact ones
   VoxelCloud cloud;
 };
 
@@ -121,17 +120,19 @@ class ShapeStage {
   // Whether Process senses q.
   bool senses_configuration() const { return configuration_.has_value(); }
 
-  // `silhouettes`: those of the cloud's frame-set, or nullptr. "" when a
-  // shape was produced (valid or not: an estimate that fails carries its
-  // error in the message); else why the cloud itself is malformed, and
-  // nothing to publish.
-  std::string Process(const voxel_cloud_t& voxels, const silhouettes_t* silhouettes,
+  const Rig& rig() const { return rig_; }
+
+  // `silhouettes`: those of the cloud's frame-set (SilhouettesFromMessage),
+  // or nullptr. "" when a shape was produced (valid or not: an estimate that
+  // fails carries its error in the message); else why the cloud itself is
+  // malformed, and nothing to publish.
+  std::string Process(const voxel_cloud_t& voxels, const SilhouetteSet* silhouettes,
                       ShapeOutput* out) const;
 
  private:
-  // Fills out->silhouettes from the message, when it is there and of the
-  // cloud's frame-set; "" or why they could not be had.
-  std::string ExpandSilhouettes(const voxel_cloud_t& voxels, const silhouettes_t* message,
+  // Fills out->silhouettes from the set, when it is there, of the cloud's
+  // frame-set and of the rig's cameras; "" or why they could not be had.
+  std::string ExpandSilhouettes(const voxel_cloud_t& voxels, const SilhouetteSet* set,
                                 ShapeOutput* out) const;
   // out->configuration from out->estimate.
   void SenseConfigurationOf(ShapeOutput* out) const;

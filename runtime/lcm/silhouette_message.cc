@@ -67,8 +67,10 @@ std::string ViewFromMessage(const silhouette_view_t& view, const Camera& camera,
 
 }  // namespace
 
-void SilhouettesToMessage(const Rig& rig, const std::vector<CompactSilhouette>& compact,
-                          silhouettes_t* message) {
+void SilhouettesToMessage(const Rig& rig, const SilhouetteSet& set, silhouettes_t* message) {
+  const std::vector<CompactSilhouette>& compact = set.views;
+  message->trigger_seq = set.trigger_seq;
+  message->trigger_utime = set.trigger_utime;
   message->views.resize(compact.size());
   message->num_views = static_cast<int32_t>(compact.size());
   for (size_t k = 0; k < compact.size(); ++k) {
@@ -88,7 +90,10 @@ void SilhouettesToMessage(const Rig& rig, const std::vector<CompactSilhouette>& 
 }
 
 std::string SilhouettesFromMessage(const silhouettes_t& message, const Rig& rig,
-                                   std::vector<CompactSilhouette>* compact) {
+                                   SilhouetteSet* set) {
+  set->trigger_seq = message.trigger_seq;
+  set->trigger_utime = message.trigger_utime;
+  std::vector<CompactSilhouette>* compact = &set->views;
   if (message.num_views != static_cast<int32_t>(message.views.size()) ||
       message.views.size() != rig.cameras.size()) {
     return "expected " + std::to_string(rig.cameras.size()) + " views (one per camera), got " +

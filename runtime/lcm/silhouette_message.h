@@ -2,6 +2,7 @@
 
 // silhouettes_t ⇄ compact silhouettes (libs/silhouette/compact_silhouette.h):
 // what the carving service sends the shape service instead of the images.
+#include <cstdint>
 #include <string>
 #include <vector>
 
@@ -11,16 +12,22 @@
 
 namespace shapesense {
 
-// One view per camera of `rig`, in its order; header and trigger are the
+// The compact silhouettes of one frame-set: what the shape stage refines against.
+struct SilhouetteSet {
+  int64_t trigger_seq = -1;
+  int64_t trigger_utime = 0;
+  std::vector<CompactSilhouette> views;  // one per camera, in the rig's order
+};
+
+// The set's trigger and one view per camera of `rig`; the header is the
 // caller's. The runs' coordinates must fit in int16 (kMaxImageSide).
-void SilhouettesToMessage(const Rig& rig, const std::vector<CompactSilhouette>& compact,
-                          silhouettes_t* message);
+void SilhouettesToMessage(const Rig& rig, const SilhouetteSet& set, silhouettes_t* message);
 
 // Checks that the message has one view per camera of `rig`, in its order and
 // of its size, with consistent counts and well-formed runs
-// (Validate(CompactSilhouette)), and fills `compact` in the rig's order.
-// "" or the reason, naming the camera.
+// (Validate(CompactSilhouette)), and fills `set`. "" or the reason, naming
+// the camera.
 std::string SilhouettesFromMessage(const silhouettes_t& message, const Rig& rig,
-                                   std::vector<CompactSilhouette>* compact);
+                                   SilhouetteSet* set);
 
 }  // namespace shapesense

@@ -108,7 +108,6 @@ ShapeService::ShapeService(const ShapeServiceOptions& options, const Rig& rig, L
                            std::optional<ConfigurationSetup> configuration)
     : options_(options),
       bus_(bus),
-      rig_(rig),
       stage_(rig, options.shape, MatchingConfiguration(options, std::move(configuration))),
       pairing_timeout_us_(static_cast<int64_t>(std::llround(options.pairing_timeout_ms * 1e3))),
       worker_(
@@ -123,18 +122,19 @@ ShapeService::ShapeService(const ShapeServiceOptions& options, const Rig& rig, L
     bus_.Subscribe<silhouettes_t>(
         channels::kSilhouettes,
         [this](silhouettes_t&& silhouettes, const std::string&, int64_t receive_utime) {
-          OnSilhouettes(std::move(silhouettes), receive_utime);
+          OnSilhouettes(silhouettes, receive_utime);
         });
   }
 }
 
-void ShapeService::OnSilhouettes(silhouettes_t&& silhouettes, int64_t receive_utime) {
-  // Checked here (tens of µs) so that malformed silhouettes are counted, not
-  // kept waiting for a cloud or silently forgotten.
-  if (const std::string error = SilhouettesFromMessage(silhouettes, rig_, &checked_);
+void ShapeService::OnSilhouettes(const silhouettes_t& message, int64_t receive_utime) {
+  // Checked and unpacked here, once (tens of µs), so that malformed
+  // silhouettes are counted, not kept waiting for a cloud or silently forgotten.
+  SilhouetteSet silhouettes;
+  if (const std::string error = SilhouettesFromMessage(message, stage_.rig(), &silhouettes);
       !error.empty()) {
     status_.Rejected();
-    status_.Note("silhouettes of " + NameOf(silhouettes) + ": " + error);
+    status_.Note("silhouettes of " + NameOf(message) + ": " + error);
     return;
   }
   std::optional<Waiting<voxel_cloud_t>> voxels =
@@ -163,7 +163,7 @@ void ShapeService::OnVoxels(voxel_cloud_t&& voxels, int64_t receive_utime) {
     worker_.Push({std::move(voxels), std::nullopt});
     return;
   }
-  std::optional<Waiting<silhouettes_t>> silhouettes =
+  std::optional<Waiting<SilhouetteSet>> silhouettes =
       TakeWaiting(waiting_silhouettes_, FrameSetOf(voxels));
   if (silhouettes) {
     worker_.Push({std::move(voxels), std::move(silhouettes->message)});
@@ -182,7 +182,7 @@ void ShapeService::Poll(int64_t now_utime) {
     worker_.Push({std::move(waiting_voxels_.front().message), std::nullopt});
     waiting_voxels_.pop_front();
   }
-  std::erase_if(waiting_silhouettes_, [&](const Waiting<silhouettes_t>& w) {
+  std::erase_if(waiting_silhouettes_, [&](const Waiting<SilhouetteSet>& w) {
     return now_utime - w.receive_utime > pairing_timeout_us_;
   });
   status_.SetQueueDepth(worker_.depth());
@@ -194,7 +194,7 @@ service_status_t ShapeService::Status(int64_t now_utime) {
 }
 
 void ShapeService::MeasureAndPublish(const Job& job) {
-  const silhouettes_t* silhouettes = job.silhouettes ? &*job.silhouettes : nullptr;
+  const SilhouetteSet* silhouettes = job.silhouettes ? &*job.silhouettes : nullptr;
   if (const std::string error = stage_.Process(job.voxels, silhouettes, &output_); !error.empty()) {
     status_.Rejected();
     status_.Note(NameOf(job.voxels) + ": " + error);

@@ -122,7 +122,7 @@ class ShapeService {
  private:
   struct Job {
     voxel_cloud_t voxels;
-    std::optional<silhouettes_t> silhouettes;
+    std::optional<SilhouetteSet> silhouettes;
   };
   template <class Message>
   struct Waiting {
@@ -130,20 +130,19 @@ class ShapeService {
     int64_t receive_utime = 0;
   };
 
-  // Both moved in from the LCM callback: tens of kB each, every frame-set.
-  void OnSilhouettes(silhouettes_t&& silhouettes, int64_t receive_utime);
+  // The cloud is moved in from the LCM callback (tens of kB every frame-set);
+  // the silhouettes are unpacked into a SilhouetteSet.
+  void OnSilhouettes(const silhouettes_t& message, int64_t receive_utime);
   void OnVoxels(voxel_cloud_t&& voxels, int64_t receive_utime);
   void MeasureAndPublish(const Job& job);
 
   ShapeServiceOptions options_;
   LcmBus& bus_;
-  Rig rig_;
   ShapeStage stage_;
   int64_t pairing_timeout_us_;
   // The bus thread's: the pairing.
-  std::deque<Waiting<silhouettes_t>> waiting_silhouettes_;
+  std::deque<Waiting<SilhouetteSet>> waiting_silhouettes_;
   std::deque<Waiting<voxel_cloud_t>> waiting_voxels_;
-  std::vector<CompactSilhouette> checked_;  // OnSilhouettes' scratch
   ServiceStatus status_{"shape"};
   ShapeOutput output_;  // the worker's, reused
   int64_t shape_seq_ = 0;

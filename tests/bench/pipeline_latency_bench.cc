@@ -421,7 +421,7 @@ double InProcessCpuMs(const BenchRig& rig, const BenchOptions& options) {
   const auto pass = [&] {
     for (const FrameSet& set : sets) {
       if (carving_stage.Process(set, &carved).empty()) {
-        shape_stage.Process(carved.message, &carved.silhouettes_message, &shaped);
+        shape_stage.Process(carved.message, &carved.compact, &shaped);
       }
     }
   };

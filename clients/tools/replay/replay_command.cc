@@ -142,8 +142,8 @@ class ReplayPipeline {
     }
     // What the live shape service gets from the carving service: the cloud
     // and the compact silhouettes.
-    const silhouettes_t* silhouettes =
-        shape_stage_.wants_silhouettes() ? &carved_.silhouettes_message : nullptr;
+    const SilhouetteSet* silhouettes =
+        shape_stage_.wants_silhouettes() ? &carved_.compact : nullptr;
     if (!shape_stage_.Process(carved_.message, silhouettes, &shaped_).empty())
       return;  // cannot happen: our own cloud
     shaped_.message.header.seq = shape_seq_++;

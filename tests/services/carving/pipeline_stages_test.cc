@@ -54,7 +54,16 @@ TEST_F(PipelineStagesTest, CarvesAndMeasuresWithinAMillimetreWithEveryStageTime)
     EXPECT_EQ(carved.silhouettes_message.num_views, 3);
     // One datagram: well under 64 kB for three VGA views.
     EXPECT_LT(carved.silhouettes_message.getEncodedSize(), 48'000);
-    ASSERT_EQ(shape.Process(carved.message, &carved.silhouettes_message, &shaped), "");
+    // Through the wire format, as the shape service receives them.
+    SilhouetteSet received;
+    ASSERT_EQ(SilhouettesFromMessage(carved.silhouettes_message, rig_->rig(), &received), "");
+    EXPECT_EQ(received.trigger_seq, 100 + i);
+    ASSERT_EQ(received.views.size(), carved.compact.views.size());
+    for (size_t k = 0; k < received.views.size(); ++k) {
+      EXPECT_EQ(received.views[k].band_difference, carved.compact.views[k].band_difference);
+      EXPECT_EQ(received.views[k].mask.size(), carved.compact.views[k].mask.size());
+    }
+    ASSERT_EQ(shape.Process(carved.message, &received, &shaped), "");
     EXPECT_EQ(shaped.warning, "");
     EXPECT_GT(shaped.estimate.silhouette_residual_mm, 0.0);  // refined
     ASSERT_TRUE(shaped.estimate.valid) << shaped.estimate.error;
@@ -79,7 +88,7 @@ TEST_F(PipelineStagesTest, SilhouettesOfAnotherFrameSetAreNotUsed) {
   ASSERT_EQ(carving.Process(AssembledSet(*rig_, 0, 1, image_t::PIXEL_BGR8), &first), "");
   ASSERT_EQ(carving.Process(AssembledSet(*rig_, 1, 2, image_t::PIXEL_BGR8), &second), "");
   ShapeOutput shaped;
-  ASSERT_EQ(shape.Process(first.message, &second.silhouettes_message, &shaped), "");
+  ASSERT_EQ(shape.Process(first.message, &second.compact, &shaped), "");
   EXPECT_NE(shaped.warning.find("of another frame-set"), std::string::npos) << shaped.warning;
   EXPECT_EQ(shaped.estimate.silhouette_residual_mm, 0.0);
 }

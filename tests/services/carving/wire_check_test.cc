@@ -59,8 +59,9 @@ shape_t RandomShape(std::mt19937& rng) {
 
 silhouettes_t RandomSilhouettes(std::mt19937& rng) {
   Rig rig;
-  std::vector<CompactSilhouette> views(rng() % 4);
-  for (CompactSilhouette& view : views) {
+  SilhouetteSet set;
+  set.views.resize(rng() % 4);
+  for (CompactSilhouette& view : set.views) {
     rig.cameras.emplace_back();
     rig.cameras.back().name = std::string(1 + rng() % 5, 'c');
     view.width = 40;
@@ -71,7 +72,7 @@ silhouettes_t RandomSilhouettes(std::mt19937& rng) {
     view.band_difference.assign(3 * view.band.size(), 7);
   }
   silhouettes_t message{};
-  SilhouettesToMessage(rig, views, &message);
+  SilhouettesToMessage(rig, set, &message);
   return message;
 }
 

@@ -165,7 +165,7 @@ TEST_F(ShapeConfigurationTest, TheShapeStageThatReplaySharesSensesQToo) {
   CarvingOutput carved;
   ASSERT_EQ(carving.Process(*set, &carved), "");
   ShapeOutput out;
-  ASSERT_EQ(stage.Process(carved.message, &carved.silhouettes_message, &out), "");
+  ASSERT_EQ(stage.Process(carved.message, &carved.compact, &out), "");
   ASSERT_TRUE(out.configuration.valid) << out.configuration.reason;
   EXPECT_TRUE(out.message.has_configuration);
   EXPECT_EQ(MessageConfiguration(out.message), out.configuration.q);
