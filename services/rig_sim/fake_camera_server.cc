@@ -1,8 +1,11 @@
 #include "services/rig_sim/fake_camera_server.h"
 
 #include <arv.h>
+#include <pthread.h>
+#include <sched.h>
 
 #include <algorithm>
+#include <cstdio>
 #include <cstring>
 #include <future>
 #include <stdexcept>
@@ -40,7 +43,29 @@ int RenderThreads() {
 // expose this much apart at most, beyond their triggers' own spread.
 constexpr auto kWatchPeriod = std::chrono::microseconds(250);
 
+// The watcher stands for the cameras' trigger inputs, which hardware serves
+// within microseconds whatever the host does: it runs at this real-time
+// priority where the process may (as root), above the services' and any
+// other load's, so that a busy machine delays the sensing, never the
+// exposures. At normal priority a starved watcher stamped exposures past
+// their triggers' windows and the capture service rightly refused them.
+constexpr int kWatcherRealtimePriority = 20;
+
 int64_t HostUtime() { return g_get_real_time(); }
+
+// Raises `thread` to kWatcherRealtimePriority (SCHED_FIFO), or says on
+// standard error why it stays at normal priority.
+void RaiseToRealtime(std::thread& thread) {
+  sched_param param{};
+  param.sched_priority = kWatcherRealtimePriority;
+  const int error = pthread_setschedparam(thread.native_handle(), SCHED_FIFO, &param);
+  if (error != 0) {
+    std::fprintf(stderr,
+                 "rig-sim: the trigger watcher runs at normal priority (real-time refused: "
+                 "%s); under load exposures may be stamped late and their images refused\n",
+                 std::strerror(error));
+  }
+}
 
 uint64_t Mix(uint64_t x) {
   x += 0x9e3779b97f4a7c15ULL;
@@ -129,6 +154,7 @@ FakeCameraServer::FakeCameraServer(Rig rig, TrajectoryOptions trajectory,
     slots_.push_back(std::move(slot));
   }
   watcher_ = std::thread([this] { WatchTriggers(); });
+  RaiseToRealtime(watcher_);
   for (int i = 0; i < RenderThreads(); ++i) {
     render_threads_.emplace_back([this] { RenderJobs(); });
   }
@@ -196,6 +222,7 @@ void FakeCameraServer::WatchTrigger(Slot& slot) {
     fills = slot.fills;
   }
   if (!TriggerWaiting(fake)) return;
+  const int64_t seen_utime = HostUtime();  // before any lock: the exposure starts now
   bool missed = false;
   {
     std::lock_guard lock(mutex_);
@@ -208,7 +235,7 @@ void FakeCameraServer::WatchTrigger(Slot& slot) {
   }
   std::lock_guard lock(slot.seen_mutex);
   if (slot.fills != fills || slot.trigger_seen_utime >= 0) return;
-  slot.trigger_seen_utime = HostUtime();
+  slot.trigger_seen_utime = seen_utime;
   slot.seen_fills = fills;
 }
 

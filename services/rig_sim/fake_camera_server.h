@@ -6,8 +6,8 @@
 //
 // Each camera times its images as a PTP-synchronised industrial camera
 // does: a software trigger starts an exposure when it reaches the camera (a
-// watcher thread sees each camera's trigger register flip, within about a
-// millisecond); the image shows the scene at that instant (the trajectory,
+// watcher thread, at real-time priority where allowed, sees each camera's
+// trigger register flip within a quarter of a millisecond); the image shows the scene at that instant (the trajectory,
 // or in plant mode the plant: plant_world.h) and is stamped with it on the
 // host's clock, which is the virtual rig's PTP time; its block id counts
 // the camera's exposures. A trigger that arrives while the camera still
