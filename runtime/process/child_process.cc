@@ -4,6 +4,7 @@
 #include <poll.h>
 #include <signal.h>
 #include <sys/prctl.h>
+#include <sys/resource.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -40,6 +41,12 @@ Pipe MakePipe() {
   }
   dup2(out.write, STDOUT_FILENO);
   if (options.capture_stderr) dup2(out.write, STDERR_FILENO);
+  if (options.nice != 0 && setpriority(PRIO_PROCESS, 0, options.nice) != 0) {
+    constexpr char kRefused[] = "nice: priority refused (no privilege); normal priority\n";
+    if (write(STDERR_FILENO, kRefused, sizeof(kRefused) - 1) < 0) {
+      // nothing more can be said from here
+    }
+  }
   execv(args[0], args);
   const int error = errno;
   if (write(error_fd, &error, sizeof(error)) < 0) _exit(127);

@@ -26,6 +26,10 @@ struct ChildOptions {
   // SIGTERM the child when the thread that started it dies, so that a parent
   // that crashes or is killed leaves no orphan running.
   bool end_with_parent = false;
+  // The child's nice value when not 0. Raising priority (< 0) needs
+  // privileges; refused, the child runs at normal priority and its output
+  // starts with a line that says so.
+  int nice = 0;
 };
 
 class ChildProcess {

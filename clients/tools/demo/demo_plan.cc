@@ -15,6 +15,8 @@ namespace {
 // none outlives a demo that was killed outright.
 // The backgrounds are grabbed one camera after another: at least this fast.
 constexpr double kBackgroundRateHz = 30.0;
+// The nice value of the programs that stand for hardware (DemoProcess::nice).
+constexpr int kHardwareNice = -10;
 
 std::string Backstop(const DemoSettings& settings) {
   return std::to_string(static_cast<int>(settings.duration_s) + 600);
@@ -57,7 +59,8 @@ DemoProcess RigSim(const DemoSettings& settings, const DemoPlan& plan, bool back
                        "--lcm-url", settings.lcm_url, "--duration", Backstop(settings)},
                       "rig-sim: ready",
                       "",
-                      false};
+                      false,
+                      kHardwareNice};
   if (backdrop_only) {
     process.argv.push_back("--backdrop-only");
   } else if (!settings.plant_config.empty()) {
@@ -93,7 +96,8 @@ DemoProcess Capture(const DemoSettings& settings, const DemoPlan& plan) {
                        "--rate", Number(settings.rate_hz), "--duration", Backstop(settings)},
                       "",
                       "",
-                      false};
+                      false,
+                      kHardwareNice};
   for (const std::string& flag : CaptureCameras(settings, plan)) process.argv.push_back(flag);
   return process;
 }

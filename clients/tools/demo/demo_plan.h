@@ -61,6 +61,11 @@ struct DemoProcess {
   std::string ready_status;
   // It runs to its end (a one-off job) instead of until the demo stops it.
   bool runs_to_end = false;
+  // Its nice value (0: the demo's). The virtual rig's cameras and the
+  // capture service's triggers stand for hardware and a real-time process:
+  // raised where allowed (as root), so that another load on the machine
+  // delays the measuring, not the exposures.
+  int nice = 0;
 };
 
 struct DemoPlan {

@@ -77,6 +77,7 @@ void DemoProcesses::Launch(const DemoProcess& process) {
   options.log_file = logs_dir_ / (process.name + ".log");
   options.own_process_group = true;  // Ctrl-C reaches the demo, which stops them in order
   options.end_with_parent = true;
+  options.nice = process.nice;
   fs::remove(options.log_file);
   try {
     running_.push_back({process, std::make_unique<ChildProcess>(process.argv, options)});

@@ -1,12 +1,13 @@
 // ChildProcess (runtime/process), as the demo uses it: output with or
 // without stderr, into a log file too; a program that cannot start named in
 // the error; exit status without waiting; a stop that reads the last words
-// and kills what does not stop; a process group of its own; and a child that
-// ends with the thread that started it.
+// and kills what does not stop; a nice value; a process group of its own;
+// and a child that ends with the thread that started it.
 #include "runtime/process/child_process.h"
 
 #include <gtest/gtest.h>
 #include <signal.h>
+#include <sys/resource.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -56,6 +57,21 @@ TEST(ChildProcessTest, KeepsStdoutAndOnRequestStderr) {
   logged << std::ifstream(options.log_file).rdbuf();
   EXPECT_EQ(logged.str(), both.output());
   fs::remove(options.log_file);
+}
+
+// Lowering the priority needs no privilege, so this holds for any user;
+// `nice` without arguments prints the niceness it runs at.
+TEST(ChildProcessTest, RunsAtTheNiceValueAsked) {
+  ChildOptions options;
+  options.capture_stderr = true;
+  options.nice = 7;
+  ChildProcess child({"/usr/bin/nice"}, options);
+  EXPECT_EQ(WaitForEnd(child), 0);
+  EXPECT_EQ(child.output(), "7\n");
+
+  ChildProcess unchanged({"/usr/bin/nice"});
+  EXPECT_EQ(WaitForEnd(unchanged), 0);
+  EXPECT_EQ(unchanged.output(), std::to_string(getpriority(PRIO_PROCESS, 0)) + "\n");
 }
 
 TEST(ChildProcessTest, AProgramThatCannotStartIsNamed) {
