@@ -1,10 +1,15 @@
 #include "services/rig_sim/fake_camera_server.h"
 
+#include <arpa/inet.h>
 #include <arv.h>
+#include <netinet/in.h>
 #include <pthread.h>
 #include <sched.h>
+#include <sys/socket.h>
+#include <unistd.h>
 
 #include <algorithm>
+#include <array>
 #include <cstdio>
 #include <cstring>
 #include <future>
@@ -42,6 +47,18 @@ int RenderThreads() {
 // up to this late after its trigger arrived, so the cameras of one trigger
 // expose this much apart at most, beyond their triggers' own spread.
 constexpr auto kWatchPeriod = std::chrono::microseconds(250);
+
+// Aravis's fake camera (0.8.26) can fall asleep for up to 100 ms with a
+// trigger waiting: its loop computes the poll timeout as an unsigned
+// difference, and when its period ends between the loop's test and that
+// subtraction, the difference wraps into a long poll that only a packet
+// ends. The next trigger's packet then ends it and both triggers get one
+// image (about 1% of triggers, more on a loaded machine). A trigger still
+// unserved this long after the watcher saw it (the camera's poll period
+// and a margin) rings the camera's doorbell: a GVCP register read, whose
+// arrival ends the poll, so that the camera serves its trigger.
+constexpr int64_t kDoorbellAfterUs = 1'000'000 / static_cast<int64_t>(kTriggerPollHz) + 1'000;
+constexpr uint16_t kGvcpPort = 3956;
 
 // The watcher stands for the cameras' trigger inputs, which hardware serves
 // within microseconds whatever the host does: it runs at this real-time
@@ -99,7 +116,9 @@ struct FakeCameraServer::Slot {
   int64_t trigger_seen_utime = -1;
   int64_t seen_fills = 0;
   int64_t fills = 0;
-  int64_t exposures = 0;  // frames made; the block id is its 16-bit form
+  bool doorbell_rung = false;  // for the waiting trigger (watcher only)
+  int doorbell = -1;           // UDP socket to the camera's GVCP port (-1: none)
+  int64_t exposures = 0;       // frames made; the block id is its 16-bit form
   // The last image sent, for the repeat fault (the camera's thread only).
   std::vector<uint8_t> last_image;
   int64_t last_frame_id = 0;
@@ -192,6 +211,36 @@ void ForgetEarlierTriggers(FakeCameraServer::Slot& slot, ArvFakeCamera* fake) {
   slot.trigger_seen_utime = -1;
 }
 
+// A UDP socket connected to the camera's GVCP port, for its doorbell; -1
+// when there can be none (an address that is not numeric).
+int OpenDoorbell(const std::string& address) {
+  const int fd = socket(AF_INET, SOCK_DGRAM | SOCK_NONBLOCK | SOCK_CLOEXEC, 0);
+  if (fd < 0) return -1;
+  sockaddr_in camera{};
+  camera.sin_family = AF_INET;
+  camera.sin_port = htons(kGvcpPort);
+  if (inet_pton(AF_INET, address.c_str(), &camera.sin_addr) != 1 ||
+      connect(fd, reinterpret_cast<const sockaddr*>(&camera), sizeof(camera)) != 0) {
+    close(fd);
+    return -1;
+  }
+  return fd;
+}
+
+// Sends a GVCP READREG command for register 0 (the GigE Vision version,
+// which no one writes): key 0x42, no acknowledge asked, command 0x0080,
+// 4 bytes of address, request id 1, all big-endian. The camera answers
+// anyway; its earlier answers are read away first.
+void RingDoorbell(int fd) {
+  constexpr std::array<uint8_t, 12> kReadVersion = {0x42, 0x00, 0x00, 0x80, 0x00, 0x04,
+                                                    0x00, 0x01, 0x00, 0x00, 0x00, 0x00};
+  std::array<uint8_t, 64> answer{};
+  while (recv(fd, answer.data(), answer.size(), 0) > 0) {
+  }
+  // A failed send (the camera just stopped) leaves the trigger to its poll.
+  [[maybe_unused]] const ssize_t sent = send(fd, kReadVersion.data(), kReadVersion.size(), 0);
+}
+
 }  // namespace
 
 // Notes when a software trigger reaches each camera: its exposure.
@@ -218,7 +267,14 @@ void FakeCameraServer::WatchTrigger(Slot& slot) {
   int64_t fills = 0;
   {
     std::lock_guard lock(slot.seen_mutex);
-    if (slot.trigger_seen_utime >= 0) return;  // the camera has yet to serve the last one
+    if (slot.trigger_seen_utime >= 0) {  // the camera has yet to serve the last one
+      if (!slot.doorbell_rung && slot.doorbell >= 0 &&
+          HostUtime() - slot.trigger_seen_utime > kDoorbellAfterUs) {
+        RingDoorbell(slot.doorbell);
+        slot.doorbell_rung = true;
+      }
+      return;
+    }
     fills = slot.fills;
   }
   if (!TriggerWaiting(fake)) return;
@@ -237,6 +293,7 @@ void FakeCameraServer::WatchTrigger(Slot& slot) {
   if (slot.fills != fills || slot.trigger_seen_utime >= 0) return;
   slot.trigger_seen_utime = seen_utime;
   slot.seen_fills = fills;
+  slot.doorbell_rung = false;
 }
 
 // The fake camera starts with the rig camera's size and RGB8, and answers a
@@ -267,6 +324,7 @@ void FakeCameraServer::Start(int camera) {
   g_object_set(gv, "gvsp-lost-ratio", packet_loss_.load(), nullptr);
   std::lock_guard lock(slots_mutex_);
   slot.gv_camera = gv;
+  slot.doorbell = OpenDoorbell(slot.address);
 }
 
 void FakeCameraServer::Stop(int camera) {
@@ -275,6 +333,8 @@ void FakeCameraServer::Stop(int camera) {
   if (slot.gv_camera == nullptr) return;
   g_object_unref(slot.gv_camera);  // joins the camera's thread
   slot.gv_camera = nullptr;
+  if (slot.doorbell >= 0) close(slot.doorbell);
+  slot.doorbell = -1;
 }
 
 bool FakeCameraServer::Running(int camera) const {
