@@ -15,7 +15,7 @@
 #include "runtime/lcm/message_convert.h"
 #include "runtime/lcm/silhouette_message.h"
 #include "tests/e2e/live_pipeline.h"
-#include "tests/services/carving/pipeline_test_support.h"
+#include "tests/support/test_rig.h"
 #include "tests/support/network_test.h"
 
 namespace shapesense::e2e {

@@ -20,7 +20,8 @@
 #include "runtime/file_io.h"
 #include "runtime/lcm/channels.h"
 #include "runtime/lcm/message_convert.h"
-#include "tests/services/carving/pipeline_test_support.h"
+#include "tests/support/service_test_options.h"
+#include "tests/support/test_rig.h"
 
 namespace shapesense {
 namespace {

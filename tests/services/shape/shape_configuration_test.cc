@@ -21,7 +21,8 @@
 #include "runtime/lcm/message_convert.h"
 #include "services/carving/carving_service.h"
 #include "services/shape/shape_service.h"
-#include "tests/services/carving/pipeline_test_support.h"
+#include "tests/support/service_test_options.h"
+#include "tests/support/test_rig.h"
 
 namespace shapesense {
 namespace {

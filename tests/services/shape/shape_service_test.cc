@@ -16,7 +16,8 @@
 #include "runtime/lcm/channels.h"
 #include "runtime/lcm/message_convert.h"
 #include "services/carving/carving_service.h"
-#include "tests/services/carving/pipeline_test_support.h"
+#include "tests/support/service_test_options.h"
+#include "tests/support/test_rig.h"
 
 namespace shapesense {
 namespace {

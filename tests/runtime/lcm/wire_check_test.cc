@@ -11,7 +11,7 @@
 #include "runtime/lcm/message_convert.h"
 #include "runtime/lcm/silhouette_message.h"
 #include "shapesense/service_status_t.hpp"
-#include "tests/services/carving/pipeline_test_support.h"
+#include "tests/support/test_rig.h"
 
 namespace shapesense {
 namespace {

@@ -11,7 +11,7 @@
 #include <random>
 
 #include "libs/silhouette/silhouette.h"
-#include "tests/services/carving/pipeline_test_support.h"
+#include "tests/support/test_rig.h"
 
 namespace shapesense {
 namespace {

@@ -1,4 +1,4 @@
-#include "tests/services/carving/pipeline_test_support.h"
+#include "tests/support/test_rig.h"
 
 #include <algorithm>
 #include <cstring>
@@ -87,26 +87,6 @@ image_t MakeImageMessage(const cv::Mat& bgr, const std::string& camera, int64_t 
   image.stage_times.push_back(MakeStageTime("capture", 1500, image.host_utime));
   image.num_stage_times = 1;
   return image;
-}
-
-CarvingServiceOptions TestCarvingOptions() {
-  CarvingServiceOptions options;
-  options.rig = "(in memory)";
-  options.backgrounds = "(in memory)";
-  options.carving.voxel_size = kTestVoxelSize;
-  options.assembly.timeout_ms = 5000;  // generous: sanitizer builds are slow
-  options.silhouette_rate_hz = 0;
-  // The tests feed faster than the worker; overload has its own test.
-  options.queue_capacity = 64;
-  return options;
-}
-
-ShapeServiceOptions TestShapeOptions() {
-  ShapeServiceOptions options;
-  options.rig = "(in memory)";
-  options.pairing_timeout_ms = 20000;
-  options.queue_capacity = 64;
-  return options;
 }
 
 double TwoWayRms(const Polyline& estimate, const Polyline& truth) {

@@ -1,7 +1,8 @@
 #pragma once
 
-// Shared by the carving, shape and replay tests: a synthetic rig with exact
-// ground truth, frame-sets rendered into image messages, and small LCM helpers.
+// Shared by the runtime, service, replay and e2e tests: a synthetic rig with
+// exact ground truth, frame-sets rendered into image messages, and small LCM
+// helpers. The services' test options are in service_test_options.h.
 #include <chrono>
 #include <cstdint>
 #include <filesystem>
@@ -12,16 +13,10 @@
 #include "libs/camera/camera.h"
 #include "libs/sim/tube_scene.h"
 #include "runtime/lcm/lcm_bus.h"
-#include "services/carving/carving_service.h"
-#include "services/shape/shape_service.h"
+#include "runtime/lcm/pipeline_stages.h"
 #include "shapesense/image_t.hpp"
 
 namespace shapesense::testing {
-
-// Voxel size of the service tests, mm: 2 mm keeps the table at 25 MB and
-// its build well under a second even under the sanitizers; the refinement
-// against the silhouettes still measures to a fraction of a millimetre.
-inline constexpr double kTestVoxelSize = 2.0;
 
 // A three-camera synthetic rig, its backgrounds, and a renderer.
 class TestRig {
@@ -57,9 +52,6 @@ void Stamp(std::vector<image_t>* images, int64_t now);
 // One image message as a capture service would publish it from a BGR frame.
 image_t MakeImageMessage(const cv::Mat& bgr, const std::string& camera, int64_t trigger_seq,
                          int64_t trigger_utime, int8_t pixel_format = image_t::PIXEL_BGR8);
-
-CarvingServiceOptions TestCarvingOptions();
-ShapeServiceOptions TestShapeOptions();
 
 // Centreline RMS both ways (estimate to truth and truth to estimate), mm.
 double TwoWayRms(const Polyline& estimate, const Polyline& truth);

@@ -10,7 +10,7 @@
 #include "libs/core/error.h"
 #include "libs/sim/tube_scene.h"
 #include "runtime/lcm/message_convert.h"
-#include "tests/services/carving/pipeline_test_support.h"
+#include "tests/support/test_rig.h"
 
 namespace shapesense {
 namespace {
@@ -28,6 +28,14 @@ FrameSet AssembledSet(const TestRig& test_rig, int scene, int64_t seq, int8_t fo
   return {};
 }
 
+// The services' tests' voxel size (2 mm: a small table, quick to build
+// even under the sanitizers), the other options their defaults.
+CarvingOptions TestCarving() {
+  CarvingOptions options;
+  options.voxel_size = 2.0;
+  return options;
+}
+
 class PipelineStagesTest : public ::testing::Test {
  protected:
   static void SetUpTestSuite() { rig_ = new TestRig(1); }
@@ -37,11 +45,9 @@ class PipelineStagesTest : public ::testing::Test {
 TestRig* PipelineStagesTest::rig_ = nullptr;
 
 TEST_F(PipelineStagesTest, CarvesAndMeasuresWithinAMillimetreWithEveryStageTime) {
-  const CarvingServiceOptions carving_options = testing::TestCarvingOptions();
-  const ShapeServiceOptions shape_options = testing::TestShapeOptions();
-  const CarvingStage carving(rig_->rig(), rig_->backgrounds(), carving_options.silhouette,
-                             carving_options.carving);
-  const ShapeStage shape(rig_->rig(), shape_options.shape);
+  const CarvingStage carving(rig_->rig(), rig_->backgrounds(), SilhouetteOptions{},
+                             TestCarving());
+  const ShapeStage shape(rig_->rig(), ShapeOptions{});
   CarvingOutput carved;
   ShapeOutput shaped;
   for (int i = 0; i < 3; ++i) {
@@ -79,10 +85,9 @@ TEST_F(PipelineStagesTest, CarvesAndMeasuresWithinAMillimetreWithEveryStageTime)
 }
 
 TEST_F(PipelineStagesTest, SilhouettesOfAnotherFrameSetAreNotUsed) {
-  const CarvingServiceOptions carving_options = testing::TestCarvingOptions();
-  const CarvingStage carving(rig_->rig(), rig_->backgrounds(), carving_options.silhouette,
-                             carving_options.carving);
-  const ShapeStage shape(rig_->rig(), testing::TestShapeOptions().shape);
+  const CarvingStage carving(rig_->rig(), rig_->backgrounds(), SilhouetteOptions{},
+                             TestCarving());
+  const ShapeStage shape(rig_->rig(), ShapeOptions{});
   CarvingOutput first;
   CarvingOutput second;
   ASSERT_EQ(carving.Process(AssembledSet(*rig_, 0, 1, image_t::PIXEL_BGR8), &first), "");
