@@ -8,6 +8,7 @@
 #include "clients/controller/controller_client.h"
 #include "clients/controller/rig_plant_driver.h"
 #include "libs/core/error.h"
+#include "runtime/command_line.h"
 #include "runtime/lcm/service_loop.h"
 
 namespace shapesense {
@@ -84,7 +85,7 @@ int RunController(const ControllerSetup& setup, const std::atomic<bool>& stop, s
     out << kName << ": failed: actuators (" << driver->description() << "): " << e.what()
         << std::endl;
     driver->Disconnect();
-    return 1;
+    return kExitFailed;
   }
   const int code = RunControllerLoop(client, stop);
   PrintSummary(client, log, out);
@@ -99,16 +100,16 @@ int ControllerMain(int argc, char** argv) {
                ": tendon control on the sensed shape, within safety limits (docs/controller.md)"};
   CommandLine line;
   AddOptions(app, line);
-  CLI11_PARSE(app, argc, argv);
+  if (const std::optional<int> exit_code = ParseCommandLine(app, argc, argv)) return *exit_code;
   try {
     return RunController(LoadControllerSetup(line.config, OverridesGiven(app, line)), stop,
                          std::cerr);
   } catch (const InputError& e) {
     std::cerr << kName << ": error: " << e.what() << std::endl;
-    return 2;
+    return kExitBadInput;
   } catch (const std::exception& e) {
     std::cerr << kName << ": failed: " << e.what() << std::endl;
-    return 1;
+    return kExitFailed;
   }
 }
 

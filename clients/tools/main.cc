@@ -11,6 +11,7 @@
 #include "clients/tools/offline_command.h"
 #include "clients/tools/replay/replay_command.h"
 #include "libs/core/error.h"
+#include "runtime/command_line.h"
 
 int main(int argc, char** argv) {
   CLI::App app{"shapesense: 3-D shape sensing of continuum manipulators"};
@@ -25,13 +26,13 @@ int main(int argc, char** argv) {
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
-    return app.exit(e);
+    return app.exit(e) == 0 ? 0 : shapesense::kExitBadInput;
   } catch (const shapesense::InputError& e) {
     std::cerr << "shapesense: error: " << e.what() << '\n';
-    return 2;
+    return shapesense::kExitBadInput;
   } catch (const std::exception& e) {
     std::cerr << "shapesense: failed: " << e.what() << '\n';
-    return 1;
+    return shapesense::kExitFailed;
   }
   return 0;
 }

@@ -4,6 +4,7 @@
 #include <iostream>
 
 #include "libs/core/error.h"
+#include "runtime/command_line.h"
 #include "runtime/lcm/service_loop.h"
 
 namespace shapesense {
@@ -35,16 +36,16 @@ int ServiceMain(int argc, char** argv, const std::string& name, const std::strin
   ServiceArgs args;
   std::string lcm_url;
   AddServiceOptions(app, args, lcm_url, example_config);
-  CLI11_PARSE(app, argc, argv);
+  if (const std::optional<int> exit_code = ParseCommandLine(app, argc, argv)) return *exit_code;
   if (app.count("--lcm-url") > 0) args.lcm_url = lcm_url;
   try {
     PrintCounters(name, run(args, StopFlagOnSignals(), std::cerr));
   } catch (const InputError& e) {
     std::cerr << name << ": error: " << e.what() << '\n';
-    return 2;
+    return kExitBadInput;
   } catch (const std::exception& e) {
     std::cerr << name << ": failed: " << e.what() << '\n';
-    return 1;
+    return kExitFailed;
   }
   return 0;
 }

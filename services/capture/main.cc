@@ -1,9 +1,12 @@
 // shapesense-capture: serves cameras on LCM (see capture_service.h), or with
-// `background` stores each camera's background image.
+// `background` stores each camera's background image. Exit codes as every
+// shapesense program: 0 done, 1 failed, 2 bad input.
 #include <CLI/CLI.hpp>
 #include <cstdio>
 #include <exception>
 
+#include "libs/core/error.h"
+#include "runtime/command_line.h"
 #include "runtime/lcm/service_loop.h"
 #include "services/capture/background_capture.h"
 #include "services/capture/capture_service.h"
@@ -30,7 +33,7 @@ int main(int argc, char** argv) {
   std::optional<std::string> out;
   background->add_option("--frames", frames, "frames per camera (default background.frames)");
   background->add_option("--out", out, "output folder (default background.out)");
-  CLI11_PARSE(app, argc, argv);
+  if (const std::optional<int> exit_code = ParseCommandLine(app, argc, argv)) return *exit_code;
   const std::atomic<bool>& stop = StopFlagOnSignals();
   try {
     args.options = LoadCaptureOptions(config, cameras, rate);
@@ -46,8 +49,11 @@ int main(int argc, char** argv) {
                   static_cast<long long>(camera.published), static_cast<long long>(camera.outages));
     }
     return 0;
+  } catch (const InputError& e) {
+    std::fprintf(stderr, "shapesense-capture: error: %s\n", e.what());
+    return kExitBadInput;
   } catch (const std::exception& e) {
-    std::fprintf(stderr, "shapesense-capture: %s\n", e.what());
-    return 1;
+    std::fprintf(stderr, "shapesense-capture: failed: %s\n", e.what());
+    return kExitFailed;
   }
 }

@@ -7,22 +7,11 @@
 #include <opencv2/core/utility.hpp>
 
 #include "libs/core/error.h"
+#include "runtime/command_line.h"
+#include "runtime/process/signal_thread.h"
 #include "services/rig_sim/rig_sim.h"
 
 namespace {
-
-std::atomic<bool> g_stop{false};
-shapesense::RigSimControl g_control;
-
-void OnSignal(int signal) {
-  if (signal == SIGUSR1) {
-    g_control.stop_fault_camera = true;
-  } else if (signal == SIGUSR2) {
-    g_control.start_fault_camera = true;
-  } else {
-    g_stop = true;
-  }
-}
 
 // The cameras' images are rendered several times a second on threads of
 // their own: keep the render buffers (megabytes each) in the heap rather
@@ -61,17 +50,28 @@ int main(int argc, char** argv) {
   app.add_option("--fault-camera", args.fault_camera, "camera SIGUSR1 stops, SIGUSR2 restarts");
   app.add_flag("--backdrop-only", args.backdrop_only, "no manipulator, no truth (backgrounds)");
   app.add_option("--write-rig", args.write_rig_path, "write the rig in use to this YAML file");
-  CLI11_PARSE(app, argc, argv);
+  if (const std::optional<int> exit_code = shapesense::ParseCommandLine(app, argc, argv)) return *exit_code;
   TuneForRendering();
-  for (const int signal : {SIGINT, SIGTERM, SIGUSR1, SIGUSR2}) std::signal(signal, OnSignal);
+  std::atomic<bool> stop{false};
+  shapesense::RigSimControl control;
+  // SIGUSR1 and SIGUSR2 stop and restart the fault camera; the others stop.
+  const shapesense::SignalThread signals({SIGINT, SIGTERM, SIGUSR1, SIGUSR2}, [&](int signal) {
+    if (signal == SIGUSR1) {
+      control.stop_fault_camera = true;
+    } else if (signal == SIGUSR2) {
+      control.start_fault_camera = true;
+    } else {
+      stop = true;
+    }
+  });
   try {
-    shapesense::RunRigSim(args, g_stop, &g_control);
+    shapesense::RunRigSim(args, stop, &control);
   } catch (const shapesense::InputError& e) {
     std::cerr << "shapesense-rig-sim: error: " << e.what() << '\n';
-    return 2;
+    return shapesense::kExitBadInput;
   } catch (const std::exception& e) {
     std::cerr << "shapesense-rig-sim: failed: " << e.what() << '\n';
-    return 1;
+    return shapesense::kExitFailed;
   }
   return 0;
 }

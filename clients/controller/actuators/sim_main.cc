@@ -19,6 +19,8 @@
 #include "clients/controller/actuators/simulated_cia402_drive.h"
 #include "clients/controller/actuators/simulated_serial_actuator.h"
 #include "clients/controller/actuators/socketcan_bus.h"
+#include "libs/core/error.h"
+#include "runtime/command_line.h"
 
 namespace shapesense {
 namespace {
@@ -82,7 +84,7 @@ int Run(int argc, char** argv) {
   app.add_option("--nodes", arguments.nodes, "CAN: node ids of the drives")
       ->delimiter(',')
       ->check(CLI::Range(1, 127));
-  CLI11_PARSE(app, argc, argv);
+  if (const std::optional<int> exit_code = ParseCommandLine(app, argc, argv)) return *exit_code;
   sigset_t signals;
   sigemptyset(&signals);
   sigaddset(&signals, SIGINT);
@@ -91,9 +93,12 @@ int Run(int argc, char** argv) {
   try {
     return arguments.can_interface.empty() ? ServeSerial(arguments, signals)
                                            : ServeCan(arguments, signals);
+  } catch (const InputError& e) {
+    std::cerr << "shapesense-actuator-sim: error: " << e.what() << std::endl;
+    return kExitBadInput;
   } catch (const std::exception& e) {
-    std::cerr << "shapesense-actuator-sim: " << e.what() << std::endl;
-    return 1;
+    std::cerr << "shapesense-actuator-sim: failed: " << e.what() << std::endl;
+    return kExitFailed;
   }
 }
 
