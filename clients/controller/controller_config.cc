@@ -13,13 +13,6 @@ namespace shapesense {
 namespace fs = std::filesystem;
 namespace {
 
-template <class T>
-std::string Expected(const std::string& key, const std::string& what, const T& got) {
-  std::ostringstream out;
-  out << key << ": expected " << what << ", got " << got;
-  return out.str();
-}
-
 // Runs `load`; an InputError from it is prefixed with the client config and
 // the key that named the file.
 template <class Load>

@@ -48,12 +48,6 @@ size_t GridIndex(int row, int col, int cols) {
   return static_cast<size_t>(row) * static_cast<size_t>(cols) + static_cast<size_t>(col);
 }
 
-std::string Number(double value) {
-  std::ostringstream out;
-  out << value;
-  return out.str();
-}
-
 int DictionarySize(const std::string& name) {
   return cv::aruco::getPredefinedDictionary(DictionaryNames().at(name))->bytesList.rows;
 }

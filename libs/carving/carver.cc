@@ -9,6 +9,7 @@
 
 #include "libs/carving/summed_area.h"
 #include "libs/carving/voxel_table.h"
+#include "libs/core/error.h"
 
 namespace shapesense {
 
@@ -18,13 +19,6 @@ using carving_detail::SummedAreaTable;
 using carving_detail::VoxelTable;
 
 namespace {
-
-template <class T>
-std::string Expected(const std::string& key, const std::string& what, const T& got) {
-  std::ostringstream text;
-  text << key << ": expected " << what << ", got " << got;
-  return text.str();
-}
 
 // One frame-set's silhouettes, checked, with raw pointers for the inner loops.
 struct Frame {

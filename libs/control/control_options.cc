@@ -7,17 +7,12 @@
 #include <sstream>
 
 #include "libs/config/options_yaml.h"
+#include "libs/core/error.h"
 
 namespace shapesense {
 namespace {
 
 constexpr double kInfinity = std::numeric_limits<double>::infinity();
-
-std::string Number(double value) {
-  std::ostringstream out;
-  out << value;
-  return out.str();
-}
 
 // "" when low <= value <= high (each bound open when the flag says so).
 std::string ExpectWithin(const std::string& key, double value, double low, double high,

@@ -1,5 +1,7 @@
 #include "libs/control/safety_gate.h"
 
+#include "libs/core/error.h"
+
 #include <Eigen/Cholesky>
 #include <algorithm>
 #include <array>
@@ -15,12 +17,6 @@ namespace {
 constexpr double kTensionMargin = 1e-9;
 // A raise smaller than this is rounding, not worth reporting, N.
 constexpr double kReportableRaise = 1e-6;
-
-std::string Number(double value) {
-  std::ostringstream out;
-  out << value;
-  return out.str();
-}
 
 GateResult Hold(const GateInput& input, uint32_t reasons) {
   return GateResult{input.previous, reasons, true};

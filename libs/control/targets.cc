@@ -16,12 +16,6 @@
 namespace shapesense {
 namespace {
 
-std::string Number(double value) {
-  std::ostringstream out;
-  out << value;
-  return out.str();
-}
-
 [[noreturn]] void Fail(const std::string& source, const std::string& where,
                        const std::string& what) {
   throw InputError(DescribeInputError(source, where, what));

@@ -1,5 +1,6 @@
 #pragma once
 
+#include <sstream>
 #include <stdexcept>
 #include <string>
 
@@ -17,6 +18,22 @@ class InputError : public std::runtime_error {
 inline std::string DescribeInputError(const std::string& source, const std::string& key,
                                       const std::string& what) {
   return source + ": " + key + ": " + what;
+}
+
+// A number in a message as people read it: the stream's default form
+// ("0.5", "1e-06", "nan"), six significant digits.
+inline std::string Number(double value) {
+  std::ostringstream out;
+  out << value;
+  return out.str();
+}
+
+// "key: expected what, got got": the one shape of a validation message.
+template <class T>
+std::string Expected(const std::string& key, const std::string& what, const T& got) {
+  std::ostringstream out;
+  out << key << ": expected " << what << ", got " << got;
+  return out.str();
 }
 
 }  // namespace shapesense

@@ -4,17 +4,12 @@
 #include <cmath>
 #include <sstream>
 
+#include "libs/core/error.h"
 #include "libs/geometry/polyline.h"
 #include "libs/mechanics/configuration_geometry.h"
 
 namespace shapesense {
 namespace {
-
-std::string Number(double value) {
-  std::ostringstream out;
-  out << value;
-  return out.str();
-}
 
 std::string Expect(bool ok, const std::string& key, const std::string& expected, double got) {
   return ok ? "" : key + ": expected " + expected + ", got " + Number(got);

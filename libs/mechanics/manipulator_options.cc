@@ -6,15 +6,10 @@
 #include <sstream>
 
 #include "libs/config/options_yaml.h"
+#include "libs/core/error.h"
 
 namespace shapesense {
 namespace {
-
-std::string Number(double value) {
-  std::ostringstream out;
-  out << value;
-  return out.str();
-}
 
 // "" when value > 0 and finite, else "key: expected a positive number, got v".
 std::string ExpectPositive(const std::string& key, double value) {

@@ -8,15 +8,11 @@
 #include <opencv2/core/check.hpp>
 #include <stdexcept>
 
+#include "libs/core/error.h"
 #include "libs/silhouette/green_difference.h"
 
 namespace shapesense {
 namespace {
-
-template <class T>
-std::string Expected(const char* key, const char* what, T got) {
-  return std::string(key) + ": expected " + what + ", got " + std::to_string(got);
-}
 
 std::string DescribeImage(const cv::Mat& image) {
   if (image.empty()) return "an empty image";

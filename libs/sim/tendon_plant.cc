@@ -6,16 +6,11 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "libs/core/error.h"
 #include "libs/mechanics/configuration_geometry.h"
 
 namespace shapesense {
 namespace {
-
-std::string Number(double value) {
-  std::ostringstream out;
-  out << value;
-  return out.str();
-}
 
 std::string ExpectWithin(const std::string& key, double value, double low, double high) {
   if (std::isfinite(value) && value >= low && value <= high) return "";

@@ -9,6 +9,7 @@
 #include <opencv2/imgproc.hpp>
 #include <stdexcept>
 
+#include "libs/core/error.h"
 #include "libs/silhouette/silhouette.h"
 
 namespace shapesense {
@@ -66,10 +67,6 @@ bool HasSignature(const std::vector<uint8_t>& data, int8_t compression) {
   }
   return data.size() >= sizeof(kJpeg) &&
          std::equal(std::begin(kJpeg), std::end(kJpeg), data.begin());
-}
-
-std::string Expected(const std::string& key, const std::string& what, const std::string& got) {
-  return key + ": expected " + what + ", got " + got;
 }
 
 std::string ValidateStageTimes(int32_t count, const std::vector<stage_time_t>& stages) {

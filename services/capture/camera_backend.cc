@@ -1,5 +1,7 @@
 #include "services/capture/camera_backend.h"
 
+#include "libs/core/error.h"
+
 #include <algorithm>
 #include <array>
 #include <sstream>
@@ -28,13 +30,6 @@ std::string Choices(const std::array<const char*, N>& choices) {
   for (size_t i = 0; i < N; ++i)
     out += (i == 0 ? "" : (i + 1 == N ? " or " : ", ")) + std::string(choices[i]);
   return out;
-}
-
-template <class T>
-std::string Expected(const std::string& key, const std::string& what, const T& got) {
-  std::ostringstream out;
-  out << key << ": expected " << what << ", got " << got;
-  return out.str();
 }
 
 std::string Quoted(const std::string& text) { return "'" + text + "'"; }

@@ -10,13 +10,6 @@
 namespace shapesense {
 namespace {
 
-template <class T>
-std::string Expected(const std::string& key, const std::string& what, const T& got) {
-  std::ostringstream out;
-  out << key << ": expected " << what << ", got " << got;
-  return out.str();
-}
-
 std::string ValidateCameras(const std::vector<CameraConfig>& cameras, const std::string& rig) {
   std::set<std::string> names;
   for (size_t i = 0; i < cameras.size(); ++i) {

@@ -25,12 +25,6 @@ constexpr int64_t kNever = std::numeric_limits<int64_t>::min();
 // a poll every few ms while the actuators move, far more while they rest.
 constexpr size_t kHistorySize = 2048;
 
-std::string Number(double value) {
-  std::ostringstream text;
-  text << value;
-  return text.str();
-}
-
 std::string ExpectWithin(const std::string& key, double value, double low, double high,
                          bool low_open = false) {
   const bool above = low_open ? value > low : value >= low;

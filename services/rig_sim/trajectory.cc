@@ -1,15 +1,13 @@
 #include "services/rig_sim/trajectory.h"
 
+#include "libs/core/error.h"
+
 #include <algorithm>
 #include <cmath>
 #include <numbers>
 
 namespace shapesense {
 namespace {
-
-std::string Expected(const std::string& key, const std::string& what, double got) {
-  return key + ": expected " + what + ", got " + std::to_string(got);
-}
 
 TrajectoryPose PoseOf(const TrajectoryKeyframe& keyframe) {
   const bool arc = keyframe.shape == "arc";

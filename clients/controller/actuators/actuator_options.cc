@@ -1,18 +1,13 @@
 #include "clients/controller/actuators/actuator_options.h"
 
+#include "libs/core/error.h"
+
 #include <cmath>
 #include <set>
 #include <sstream>
 
 namespace shapesense {
 namespace {
-
-template <class T>
-std::string Expected(const std::string& key, const std::string& what, const T& got) {
-  std::ostringstream out;
-  out << key << ": expected " << what << ", got " << got;
-  return out.str();
-}
 
 bool InRange(double value, double low, double high) { return value >= low && value <= high; }
 

@@ -9,18 +9,13 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "libs/core/error.h"
 #include "libs/mechanics/configuration_geometry.h"
 
 namespace shapesense {
 namespace {
 
 constexpr double kPi = 3.14159265358979323846;
-
-std::string Number(double value) {
-  std::ostringstream out;
-  out << value;
-  return out.str();
-}
 
 std::string Fixed(double value, int width, int precision) {
   std::ostringstream out;

@@ -23,7 +23,9 @@ std::string Backstop(const DemoSettings& settings) {
 }
 
 // The shortest text that reads back as exactly `value`.
-std::string Number(double value) {
+// A number for a program's command line: the shortest text that reads back
+// as the same double (the message form, Number, keeps six digits).
+std::string ExactNumber(double value) {
   char text[32];
   const auto end = std::to_chars(text, text + sizeof(text), value).ptr;
   return std::string(text, end);
@@ -81,7 +83,7 @@ DemoProcess CaptureBackground(const DemoSettings& settings, const DemoPlan& plan
       "capture-background", {Program(settings, "shapesense-capture")}, "", "", true};
   for (const std::string& flag : CaptureCameras(settings, plan)) process.argv.push_back(flag);
   for (const std::string& arg :
-       {std::string("--rate"), Number(std::max(settings.rate_hz, kBackgroundRateHz)),
+       {std::string("--rate"), ExactNumber(std::max(settings.rate_hz, kBackgroundRateHz)),
         std::string("background"), std::string("--frames"),
         std::to_string(settings.background_frames), std::string("--out"),
         plan.backgrounds.string()}) {
@@ -93,7 +95,7 @@ DemoProcess CaptureBackground(const DemoSettings& settings, const DemoPlan& plan
 DemoProcess Capture(const DemoSettings& settings, const DemoPlan& plan) {
   DemoProcess process{"capture",
                       {Program(settings, "shapesense-capture"), "--lcm-url", settings.lcm_url,
-                       "--rate", Number(settings.rate_hz), "--duration", Backstop(settings)},
+                       "--rate", ExactNumber(settings.rate_hz), "--duration", Backstop(settings)},
                       "",
                       "",
                       false,
@@ -152,7 +154,7 @@ std::string SimulatedCaptureConfig(const DemoSettings& settings, const DemoPlan&
   for (const std::string& name : settings.camera_names) {
     out << "  - {name: " << name << ", backend: simulated}\n";
   }
-  out << "trigger_rate_hz: " << Number(settings.rate_hz) << "\nrig: " << plan.rig.string()
+  out << "trigger_rate_hz: " << ExactNumber(settings.rate_hz) << "\nrig: " << plan.rig.string()
       << "\nsimulation:\n  seed: " << settings.seed << "\n";
   return out.str();
 }
