@@ -2,6 +2,7 @@
 # for the whole build when SHAPESENSE_SANITIZE is on.
 
 add_library(shapesense_warnings INTERFACE)
+add_library(shapesense::warnings ALIAS shapesense_warnings)
 target_compile_options(shapesense_warnings INTERFACE
   -Wall -Wextra -Wpedantic -Wshadow -Wnon-virtual-dtor -Wold-style-cast
   -Wcast-align -Woverloaded-virtual -Wnull-dereference -Wimplicit-fallthrough
@@ -12,12 +13,21 @@ if(SHAPESENSE_SANITIZE)
   add_link_options(-fsanitize=address,undefined)
 endif()
 
+# shapesense_alias(NAME): shapesense::X for the target shapesense_X. Targets
+# link each other by these names: a misspelt one is a configure error, not a
+# plain "-lshapesense_x" that fails at link time, if ever.
+function(shapesense_alias name)
+  string(REGEX REPLACE "^shapesense_" "" short ${name})
+  add_library(shapesense::${short} ALIAS ${name})
+endfunction()
+
 # shapesense_library(NAME SOURCES ... DEPS ...): one library target per folder.
 function(shapesense_library name)
   cmake_parse_arguments(ARG "" "" "SOURCES;DEPS;PRIVATE_DEPS" ${ARGN})
   add_library(${name} ${ARG_SOURCES})
+  shapesense_alias(${name})
   target_include_directories(${name} PUBLIC ${PROJECT_SOURCE_DIR})
-  target_link_libraries(${name} PUBLIC ${ARG_DEPS} PRIVATE shapesense_warnings ${ARG_PRIVATE_DEPS})
+  target_link_libraries(${name} PUBLIC ${ARG_DEPS} PRIVATE shapesense::warnings ${ARG_PRIVATE_DEPS})
 endfunction()
 
 # shapesense_executable(NAME SOURCES ... DEPS ...): every program lands in
@@ -26,7 +36,14 @@ function(shapesense_executable name)
   cmake_parse_arguments(ARG "" "" "SOURCES;DEPS" ${ARGN})
   add_executable(${name} ${ARG_SOURCES})
   set_target_properties(${name} PROPERTIES RUNTIME_OUTPUT_DIRECTORY ${PROJECT_BINARY_DIR}/bin)
-  target_link_libraries(${name} PRIVATE shapesense_warnings ${ARG_DEPS})
+  target_link_libraries(${name} PRIVATE shapesense::warnings ${ARG_DEPS})
+  # The shipped programs (not the benches under tests/) make the `programs`
+  # target: what the demo runs, built without the tests.
+  set(tests_dir "${PROJECT_SOURCE_DIR}/tests")
+  cmake_path(IS_PREFIX tests_dir "${CMAKE_CURRENT_SOURCE_DIR}" NORMALIZE under_tests)
+  if(NOT under_tests)
+    set_property(GLOBAL APPEND PROPERTY SHAPESENSE_PROGRAMS ${name})
+  endif()
 endfunction()
 
 # shapesense_test(NAME SOURCES ... DEPS ... [LABELS ...]): one gtest executable,
@@ -34,7 +51,7 @@ endfunction()
 function(shapesense_test name)
   cmake_parse_arguments(ARG "" "TIMEOUT" "SOURCES;DEPS;LABELS" ${ARGN})
   add_executable(${name} ${ARG_SOURCES})
-  target_link_libraries(${name} PRIVATE shapesense_warnings GTest::gtest GTest::gtest_main GTest::gmock ${ARG_DEPS})
+  target_link_libraries(${name} PRIVATE shapesense::warnings GTest::gtest GTest::gtest_main GTest::gmock ${ARG_DEPS})
   target_compile_definitions(${name} PRIVATE SHAPESENSE_SOURCE_DIR="${PROJECT_SOURCE_DIR}")
   if(NOT ARG_TIMEOUT)
     set(ARG_TIMEOUT 600)

@@ -14,7 +14,8 @@ if [ $# -gt 0 ] && [ "${1#-}" = "$1" ]; then
   shift
 fi
 bash "$ROOT/deploy/install-deps.sh"
-bash "$ROOT/deploy/build.sh" release
+# The programs alone: the tests (most of the targets) are deploy/test.sh's.
+bash "$ROOT/deploy/build.sh" release programs
 
 bash "$ROOT/deploy/socket-buffers.sh"
 "$ROOT/build/bin/shapesense" demo --out "$OUT" "$@"

@@ -12,8 +12,8 @@
 #include <utility>
 #include <vector>
 
+#include "libs/camera/genicam_pixel_formats.h"
 #include "services/capture/exposure_matcher.h"
-#include "services/capture/genicam_pixel_formats.h"
 
 namespace shapesense {
 namespace {

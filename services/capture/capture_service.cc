@@ -13,9 +13,9 @@
 #include "runtime/lcm/channels.h"
 #include "runtime/lcm/image_buses.h"
 #include "runtime/lcm/service_status.h"
+#include "runtime/lcm/truth_message.h"
 #include "services/capture/image_message.h"
 #include "services/capture/trigger_queue.h"
-#include "services/rig_sim/frame_set_truth.h"
 
 namespace shapesense {
 namespace {

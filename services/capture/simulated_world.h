@@ -2,14 +2,14 @@
 
 // What the simulated cameras of one capture process look at: a rig and the
 // virtual rig's manipulator moving along its scripted trajectory
-// (services/rig_sim/trajectory.h), rendered by libs/sim.
+// (libs/sim/trajectory.h), rendered by libs/sim.
 
 #include <cstdint>
 #include <string>
 
 #include "libs/camera/camera.h"
+#include "libs/sim/trajectory.h"
 #include "libs/sim/tube_scene.h"
-#include "services/rig_sim/trajectory.h"
 
 namespace shapesense {
 

@@ -16,7 +16,7 @@
 #include <stdexcept>
 #include <thread>
 
-#include "services/capture/genicam_pixel_formats.h"
+#include "libs/camera/genicam_pixel_formats.h"
 #include "services/rig_sim/raw_image.h"
 
 namespace shapesense {

@@ -7,8 +7,8 @@
 // Each camera times its images as a PTP-synchronised industrial camera
 // does: a software trigger starts an exposure when it reaches the camera (a
 // watcher thread, at real-time priority where allowed, sees each camera's
-// trigger register flip within a quarter of a millisecond); the image shows the scene at that instant (the trajectory,
-// or in plant mode the plant: plant_world.h) and is stamped with it on the
+// trigger register flip within a quarter of a millisecond); the image shows the scene at that
+// instant (the trajectory, or in plant mode the plant: plant_world.h) and is stamped with it on the
 // host's clock, which is the virtual rig's PTP time; its block id counts
 // the camera's exposures. A trigger that arrives while the camera still
 // waits to serve the last one is missed, as on a real camera that is busy:
@@ -36,9 +36,9 @@
 #include <vector>
 
 #include "libs/camera/camera.h"
+#include "libs/sim/trajectory.h"
 #include "libs/sim/tube_scene.h"
 #include "services/rig_sim/plant_world.h"
-#include "services/rig_sim/trajectory.h"
 
 namespace shapesense {
 

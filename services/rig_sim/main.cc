@@ -50,7 +50,8 @@ int main(int argc, char** argv) {
   app.add_option("--fault-camera", args.fault_camera, "camera SIGUSR1 stops, SIGUSR2 restarts");
   app.add_flag("--backdrop-only", args.backdrop_only, "no manipulator, no truth (backgrounds)");
   app.add_option("--write-rig", args.write_rig_path, "write the rig in use to this YAML file");
-  if (const std::optional<int> exit_code = shapesense::ParseCommandLine(app, argc, argv)) return *exit_code;
+  if (const std::optional<int> exit_code = shapesense::ParseCommandLine(app, argc, argv))
+    return *exit_code;
   TuneForRendering();
   std::atomic<bool> stop{false};
   shapesense::RigSimControl control;

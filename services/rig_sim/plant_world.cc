@@ -15,7 +15,7 @@
 #include "runtime/file_io.h"
 #include "runtime/lcm/channels.h"
 #include "runtime/lcm/message_convert.h"
-#include "services/rig_sim/frame_set_truth.h"
+#include "runtime/lcm/truth_message.h"
 
 namespace shapesense {
 namespace {

@@ -160,7 +160,7 @@ class PlantWorld {
   // header.seq is the publisher's to set.
   tendon_state_t State(int64_t utime);
   // The ground truth of a frame-set whose scene came from SceneAtUtime, as
-  // FrameSetTruth (frame_set_truth.h) makes it for the trajectory, with the
+  // FrameSetTruth (runtime/lcm/truth_message.h) makes it for the trajectory, with the
   // exact curvature along the centreline and q (has_configuration).
   // Throws std::invalid_argument on a scene without a configuration.
   shape_t TruthMessage(const TubeScene& scene, int64_t trigger_seq, int64_t trigger_utime,

@@ -2,7 +2,7 @@
 
 #include <opencv2/imgproc.hpp>
 
-#include "services/capture/genicam_pixel_formats.h"
+#include "libs/camera/genicam_pixel_formats.h"
 
 namespace shapesense {
 namespace {

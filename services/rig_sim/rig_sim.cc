@@ -14,8 +14,8 @@
 #include "runtime/lcm/channels.h"
 #include "runtime/lcm/lcm_bus.h"
 #include "runtime/lcm/service_status.h"
+#include "runtime/lcm/truth_message.h"
 #include "services/rig_sim/fake_camera_server.h"
-#include "services/rig_sim/frame_set_truth.h"
 
 namespace shapesense {
 namespace {

@@ -6,7 +6,7 @@
 // (fake_camera_server.h), so the capture service reads it with its Aravis
 // backend over the real protocol. The ground truth at every exposure of the
 // reference camera (the first) goes out on channels::kTruth (shape_t,
-// frame_set_truth.h); status at 1 Hz on channels::Status("rig_sim").
+// runtime/lcm/truth_message.h); status at 1 Hz on channels::Status("rig_sim").
 //
 // Plant mode (--plant, plant_world.h): the manipulator is the tendon plant
 // the controller drives over channels::kPlantCommand, its actuators

@@ -4,10 +4,10 @@
 #include <thread>
 
 #include "libs/sim/scene_generators.h"
+#include "libs/sim/trajectory.h"
 #include "runtime/dataset.h"
 #include "runtime/lcm/channels.h"
 #include "services/capture/image_message.h"
-#include "services/rig_sim/trajectory.h"
 
 namespace shapesense::bench {
 namespace {

@@ -2,7 +2,7 @@
 
 // The pipeline latency bench's cameras: a synthetic rig, its backgrounds, and
 // frame-sets of the virtual rig's manipulator moving along its built-in
-// trajectory (services/rig_sim/trajectory.h), rendered ahead of time and
+// trajectory (libs/sim/trajectory.h), rendered ahead of time and
 // turned into image messages the way the capture service builds them; the
 // bench only stamps the trigger and publishes.
 #include <cstdint>

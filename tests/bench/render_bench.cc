@@ -10,7 +10,7 @@
 #include <opencv2/core/utility.hpp>
 
 #include "libs/sim/scene_generators.h"
-#include "services/rig_sim/trajectory.h"
+#include "libs/sim/trajectory.h"
 
 namespace shapesense {
 namespace {

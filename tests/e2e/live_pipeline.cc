@@ -10,12 +10,12 @@
 #include "libs/config/options_yaml.h"
 #include "libs/geometry/polyline.h"
 #include "libs/sim/scene_generators.h"
+#include "libs/sim/trajectory.h"
 #include "runtime/dataset.h"
 #include "runtime/file_io.h"
 #include "runtime/lcm/channels.h"
 #include "runtime/lcm/image_buses.h"
 #include "services/carving/carving_service.h"
-#include "services/rig_sim/trajectory.h"
 #include "services/shape/shape_service.h"
 
 namespace shapesense::e2e {

@@ -5,8 +5,8 @@
 #include <opencv2/imgproc.hpp>
 
 #include "libs/sim/scene_generators.h"
+#include "runtime/lcm/truth_message.h"
 #include "services/capture/aravis_camera.h"
-#include "services/rig_sim/frame_set_truth.h"
 #include "services/rig_sim/raw_image.h"
 
 namespace shapesense {

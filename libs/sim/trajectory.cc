@@ -1,4 +1,4 @@
-#include "services/rig_sim/trajectory.h"
+#include "libs/sim/trajectory.h"
 
 #include "libs/core/error.h"
 

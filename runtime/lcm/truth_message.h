@@ -2,8 +2,8 @@
 
 #include <cstdint>
 
+#include "libs/sim/trajectory.h"
 #include "libs/sim/tube_scene.h"
-#include "services/rig_sim/trajectory.h"
 #include "shapesense/shape_t.hpp"
 
 namespace shapesense {

@@ -1,7 +1,7 @@
 // The scripted trajectory: keyframes reproduced exactly (against libs/sim's
 // own arc and S-curve generators), looping, continuous, inside the cameras.
 
-#include "services/rig_sim/trajectory.h"
+#include "libs/sim/trajectory.h"
 
 #include <gtest/gtest.h>
 

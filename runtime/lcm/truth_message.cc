@@ -1,4 +1,4 @@
-#include "services/rig_sim/frame_set_truth.h"
+#include "runtime/lcm/truth_message.h"
 
 #include <algorithm>
 #include <cmath>
