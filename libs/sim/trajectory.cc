@@ -1,10 +1,11 @@
 #include "libs/sim/trajectory.h"
 
-#include "libs/core/error.h"
-
 #include <algorithm>
 #include <cmath>
 #include <numbers>
+
+#include "libs/core/error.h"
+#include "libs/sim/arc_piece.h"
 
 namespace shapesense {
 namespace {
@@ -23,35 +24,14 @@ TrajectoryPose Blend(const TrajectoryPose& a, const TrajectoryPose& b, double w)
           mix(a.twist, b.twist)};
 }
 
-// A circular piece (straight when the curvature is ~0) from `start`, unit
-// tangent `tangent`, curving towards the unit `normal`.
-struct Piece {
-  Vec3 start, tangent, normal;
-  double curvature = 0.0;  // 1/mm, signed
-  double length = 0.0;     // mm
-
-  Vec3 PointAt(double s) const {
-    if (std::abs(curvature) < 1e-12) return start + s * tangent;
-    const double angle = curvature * s;
-    return start + (std::sin(angle) / curvature) * tangent +
-           ((1.0 - std::cos(angle)) / curvature) * normal;
-  }
-  Vec3 TangentAt(double s) const {
-    return std::cos(curvature * s) * tangent + std::sin(curvature * s) * normal;
-  }
-  Vec3 NormalAt(double s) const {
-    return -std::sin(curvature * s) * tangent + std::cos(curvature * s) * normal;
-  }
-};
-
 Polyline Centerline(const Vec3& base, const TrajectoryPose& pose, double spacing) {
   const double half = pose.length / 2;
   const Vec3 bend(std::cos(pose.bend_plane), std::sin(pose.bend_plane), 0.0);
-  const Piece first{base, Vec3::UnitZ(), bend, pose.first_bend / half, half};
+  const ArcPiece first{base, Vec3::UnitZ(), bend, pose.first_bend / half, half};
   const Vec3 joint_tangent = first.TangentAt(half);
   const Vec3 second_normal = Eigen::AngleAxisd(pose.twist, joint_tangent) * first.NormalAt(half);
-  const Piece second{first.PointAt(half), joint_tangent, second_normal, pose.second_bend / half,
-                     half};
+  const ArcPiece second{first.PointAt(half), joint_tangent, second_normal, pose.second_bend / half,
+                        half};
   const int steps = std::max(2, static_cast<int>(std::ceil(pose.length / spacing - 1e-9)));
   Polyline points;
   points.reserve(static_cast<size_t>(steps) + 1);
