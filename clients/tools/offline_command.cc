@@ -10,6 +10,7 @@
 #include "runtime/dataset.h"
 #include "runtime/file_io.h"
 #include "runtime/progress.h"
+#include "runtime/provenance.h"
 #include "runtime/shape_json.h"
 
 namespace shapesense {
@@ -38,6 +39,12 @@ std::ofstream OpenOutput(const fs::path& path) {
   std::ofstream out(path, std::ios::trunc);
   if (!out) throw InputError(path.string() + ": cannot be opened for writing");
   return out;
+}
+
+// Beside the output: results.jsonl -> results.config.yaml.
+fs::path EffectiveConfigPath(const fs::path& out) {
+  fs::path path = out;
+  return path.replace_extension(".config.yaml");
 }
 
 // Builds the carving lookup table with a progress bar.
@@ -82,6 +89,9 @@ OfflineSummary RunOffline(const OfflineArgs& args, std::ostream& log,
   const SensingPipeline pipeline = MakePipeline(dataset, options, args.progress);
   summary.table_build_s = SecondsSince(build_start);
   std::ofstream out = OpenOutput(args.out);
+  WriteEffectiveConfig(EffectiveConfigPath(args.out),
+                       "shapesense offline on " + args.dataset.string() + " -> " + args.out.string(),
+                       OptionsToDocumentedYaml(options));
   if (!args.overlays.empty()) fs::create_directories(args.overlays);
 
   ProgressBar bar("frames", args.progress);

@@ -14,7 +14,8 @@ namespace shapesense {
 
 struct OfflineArgs {
   std::filesystem::path dataset;
-  std::filesystem::path out;         // JSON lines, one per frame
+  std::filesystem::path out;         // JSON lines, one per frame; OUT.config.yaml beside it:
+                                     // the effective options, version and time
   std::optional<double> voxel_size;  // mm; overrides the config
   std::filesystem::path config;      // pipeline YAML (config/pipeline.yaml); empty: defaults
   std::filesystem::path overlays;    // folder for overlay PNGs; empty: none

@@ -399,6 +399,7 @@ nlohmann::json MeanError(const ExperimentReport& report, const std::string& mode
 
 nlohmann::json ExperimentReportToJson(const ExperimentReport& report) {
   nlohmann::json json;
+  json["provenance"] = ProvenanceToJson();
   json["open_loop_tip_error_mm"] = MeanError(report, "open_loop");
   json["closed_loop_tip_error_mm"] = MeanError(report, "closed_loop");
   json["limit_violations"] = report.limit_violations();

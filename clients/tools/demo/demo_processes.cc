@@ -145,9 +145,9 @@ void DemoProcesses::CheckRunning() {
 ProgramEnd DemoProcesses::Stop(const std::string& name) {
   const auto found = std::find_if(running_.begin(), running_.end(),
                                   [&](const Running& r) { return r.process.name == name; });
-  if (found == running_.end()) return {name, "was not running", false};
+  if (found == running_.end()) return {name, "was not running", false, {}};
   const int status = found->child->Stop(kStopGrace);
-  ProgramEnd end{name, DescribeExitStatus(status), status == 0};
+  ProgramEnd end{name, DescribeExitStatus(status), status == 0, found->process.argv};
   running_.erase(found);
   ends_.push_back(end);
   return end;

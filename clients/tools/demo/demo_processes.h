@@ -34,6 +34,7 @@ struct ProgramEnd {
   std::string name;
   std::string how;  // "exited with status 0", ...
   bool clean = false;
+  std::vector<std::string> argv;  // how it was run (empty: it was not)
 };
 
 // `name` on $PATH; empty when it is not there.

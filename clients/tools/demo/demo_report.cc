@@ -4,6 +4,7 @@
 #include <sstream>
 
 #include "clients/tools/monitor/monitor_command.h"
+#include "runtime/provenance.h"
 
 namespace shapesense {
 namespace {
@@ -100,10 +101,15 @@ nlohmann::json ReplayToJson(const ReplayCheck& c) {
 
 }  // namespace
 
+nlohmann::json ProvenanceToJson() {
+  return {{"version", ProjectVersion()}, {"written", UtcNow()}};
+}
+
 nlohmann::json ProgramsToJson(const std::vector<ProgramEnd>& programs) {
   nlohmann::json out = nlohmann::json::array();
   for (const ProgramEnd& end : programs) {
-    out.push_back({{"name", end.name}, {"ended", end.how}, {"clean", end.clean}});
+    out.push_back(
+        {{"name", end.name}, {"ended", end.how}, {"clean", end.clean}, {"argv", end.argv}});
   }
   return out;
 }
@@ -149,7 +155,8 @@ void PrintReplayCheck(const ReplayCheck& c, std::ostream& out) {
 
 nlohmann::json LiveReportToJson(const LiveDemoReport& r) {
   const LiveScorer::Report& s = r.score.live;
-  return {{"run",
+  return {{"provenance", ProvenanceToJson()},
+          {"run",
            {{"network", r.network},
             {"cameras", r.cameras},
             {"lcm_url", r.lcm_url},

@@ -37,7 +37,9 @@ void PrintLiveSummary(const LiveDemoReport& report, std::ostream& out);
 void PrintReplayCheck(const ReplayCheck& check, std::ostream& out);
 
 nlohmann::json LiveReportToJson(const LiveDemoReport& report);
-// How each program ended: [{name, ended, clean}], for the reports.
+// How each program ran and ended: [{name, ended, clean, argv}], for the reports.
 nlohmann::json ProgramsToJson(const std::vector<ProgramEnd>& programs);
+// What produced a report: the project's version and the time (UTC).
+nlohmann::json ProvenanceToJson();
 
 }  // namespace shapesense

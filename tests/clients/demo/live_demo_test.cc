@@ -14,6 +14,7 @@
 #include <sstream>
 
 #include "clients/tools/demo/live_demo.h"
+#include "runtime/provenance.h"
 #include "tests/support/network_test.h"
 
 namespace shapesense {
@@ -59,7 +60,12 @@ class LiveDemoTest : public ::testing::Test {
     EXPECT_EQ(report["failed"], "");
     for (const nlohmann::json& program : report["programs"]) {
       EXPECT_TRUE(program["clean"].get<bool>()) << program.dump();
+      // How it ran: its program path first.
+      ASSERT_FALSE(program["argv"].empty()) << program.dump();
+      EXPECT_TRUE(fs::exists(program["argv"][0].get<std::string>())) << program.dump();
     }
+    EXPECT_EQ(report["provenance"]["version"], ProjectVersion());
+    EXPECT_FALSE(report["provenance"]["written"].get<std::string>().empty());
     EXPECT_GT(report["frame_sets"]["measured"].get<int>(), 0) << log;
     EXPECT_GT(report["accuracy_mm"]["frame_sets"].get<int>(), 0) << log;
     EXPECT_LT(report["accuracy_mm"]["centerline_rms"]["mean"].get<double>(), 1.0) << log;

@@ -12,7 +12,9 @@
 #include "libs/geometry/polyline.h"
 #include "libs/sim/scene_generators.h"
 #include "runtime/dataset.h"
+#include "runtime/config_file.h"
 #include "runtime/file_io.h"
+#include "runtime/provenance.h"
 
 namespace shapesense {
 namespace {
@@ -104,6 +106,23 @@ TEST(OfflineCommandTest, WritesOneAccurateLinePerFrameInOrder) {
       EXPECT_GE(line["stage_ms"][stage].get<double>(), 0.0) << stage;
     }
   }
+}
+
+TEST(OfflineCommandTest, TheEffectiveOptionsAndTheVersionAreWrittenBesideTheOutput) {
+  TempDir dir;
+  WriteDataset(dir.path / "data", 1);
+  std::ostringstream log;
+  RunOffline(ArgsFor(dir.path), log);
+  const fs::path written = dir.path / "out" / "shapes.config.yaml";
+  ASSERT_TRUE(fs::exists(written));
+  const std::string text = ReadTextFile(written);
+  EXPECT_EQ(text.rfind("# shapesense offline on ", 0), 0u) << text;
+  EXPECT_NE(text.find(ProjectVersion()), std::string::npos) << text;
+  EXPECT_FALSE(ProjectVersion().empty());
+  // A config file as --config takes it, with the --voxel-size that was given.
+  const PipelineOptions options = LoadOptionsFile<PipelineOptions>(written);
+  EXPECT_EQ(options.carving.voxel_size, 2.0);
+  EXPECT_EQ(options.silhouette.Validate(), "");
 }
 
 TEST(OfflineCommandTest, AFrameThatCannotBeReadIsReportedAndTheOthersStillMeasured) {
