@@ -89,9 +89,10 @@ OfflineSummary RunOffline(const OfflineArgs& args, std::ostream& log,
   const SensingPipeline pipeline = MakePipeline(dataset, options, args.progress);
   summary.table_build_s = SecondsSince(build_start);
   std::ofstream out = OpenOutput(args.out);
-  WriteEffectiveConfig(EffectiveConfigPath(args.out),
-                       "shapesense offline on " + args.dataset.string() + " -> " + args.out.string(),
-                       OptionsToDocumentedYaml(options));
+  WriteEffectiveConfig(
+      EffectiveConfigPath(args.out),
+      "shapesense offline on " + args.dataset.string() + " -> " + args.out.string(),
+      OptionsToDocumentedYaml(options));
   if (!args.overlays.empty()) fs::create_directories(args.overlays);
 
   ProgressBar bar("frames", args.progress);

@@ -11,8 +11,10 @@
 #include "services/capture/background_capture.h"
 #include "services/capture/capture_service.h"
 
-int main(int argc, char** argv) {
-  using namespace shapesense;
+namespace shapesense {
+namespace {
+
+int Run(int argc, char** argv) {
   KeepFreedMemoryForReuse();
   CLI::App app("shapesense-capture: camera images on LCM (Aravis, V4L2, replay, simulated)");
   std::string config;
@@ -57,3 +59,8 @@ int main(int argc, char** argv) {
     return kExitFailed;
   }
 }
+
+}  // namespace
+}  // namespace shapesense
+
+int main(int argc, char** argv) { return shapesense::Run(argc, argv); }

@@ -15,8 +15,8 @@
 #include "runtime/lcm/message_convert.h"
 #include "runtime/lcm/silhouette_message.h"
 #include "tests/e2e/live_pipeline.h"
-#include "tests/support/test_rig.h"
 #include "tests/support/network_test.h"
+#include "tests/support/test_rig.h"
 
 namespace shapesense::e2e {
 namespace {

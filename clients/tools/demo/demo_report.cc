@@ -101,9 +101,7 @@ nlohmann::json ReplayToJson(const ReplayCheck& c) {
 
 }  // namespace
 
-nlohmann::json ProvenanceToJson() {
-  return {{"version", ProjectVersion()}, {"written", UtcNow()}};
-}
+nlohmann::json ProvenanceToJson() { return {{"version", ProjectVersion()}, {"written", UtcNow()}}; }
 
 nlohmann::json ProgramsToJson(const std::vector<ProgramEnd>& programs) {
   nlohmann::json out = nlohmann::json::array();

@@ -11,8 +11,8 @@
 #include "libs/core/error.h"
 #include "libs/geometry/polyline.h"
 #include "libs/sim/scene_generators.h"
-#include "runtime/dataset.h"
 #include "runtime/config_file.h"
+#include "runtime/dataset.h"
 #include "runtime/file_io.h"
 #include "runtime/provenance.h"
 

@@ -45,8 +45,7 @@ class PipelineStagesTest : public ::testing::Test {
 TestRig* PipelineStagesTest::rig_ = nullptr;
 
 TEST_F(PipelineStagesTest, CarvesAndMeasuresWithinAMillimetreWithEveryStageTime) {
-  const CarvingStage carving(rig_->rig(), rig_->backgrounds(), SilhouetteOptions{},
-                             TestCarving());
+  const CarvingStage carving(rig_->rig(), rig_->backgrounds(), SilhouetteOptions{}, TestCarving());
   const ShapeStage shape(rig_->rig(), ShapeOptions{});
   CarvingOutput carved;
   ShapeOutput shaped;
@@ -85,8 +84,7 @@ TEST_F(PipelineStagesTest, CarvesAndMeasuresWithinAMillimetreWithEveryStageTime)
 }
 
 TEST_F(PipelineStagesTest, SilhouettesOfAnotherFrameSetAreNotUsed) {
-  const CarvingStage carving(rig_->rig(), rig_->backgrounds(), SilhouetteOptions{},
-                             TestCarving());
+  const CarvingStage carving(rig_->rig(), rig_->backgrounds(), SilhouetteOptions{}, TestCarving());
   const ShapeStage shape(rig_->rig(), ShapeOptions{});
   CarvingOutput first;
   CarvingOutput second;
