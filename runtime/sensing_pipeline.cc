@@ -13,6 +13,8 @@ double MillisecondsSince(Clock::time_point start) {
   return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
 }
 
+}  // namespace
+
 void CheckBackgrounds(const Rig& rig, const std::vector<cv::Mat>& backgrounds) {
   if (backgrounds.size() != rig.cameras.size()) {
     throw InputError("expected one background per camera (" + std::to_string(rig.cameras.size()) +
@@ -27,8 +29,6 @@ void CheckBackgrounds(const Rig& rig, const std::vector<cv::Mat>& backgrounds) {
     }
   }
 }
-
-}  // namespace
 
 std::string PipelineOptions::Validate() const {
   for (const auto& [section, error] :

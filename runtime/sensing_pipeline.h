@@ -47,6 +47,10 @@ struct FrameResult {
   StageTimes times;
 };
 
+// Throws InputError unless there is one 8-bit BGR background per camera of
+// the rig, of its camera's size (every chain that extracts silhouettes).
+void CheckBackgrounds(const Rig& rig, const std::vector<cv::Mat>& backgrounds);
+
 // Silhouettes → carving → shape for one rig, timing each stage. Owns the
 // lookup table, so build it once per rig.
 class SensingPipeline {

@@ -10,6 +10,7 @@
 #include "runtime/lcm/lcm_bus.h"
 #include "runtime/lcm/message_convert.h"
 #include "runtime/lcm/silhouette_message.h"
+#include "runtime/sensing_pipeline.h"
 
 namespace shapesense {
 namespace fs = std::filesystem;
@@ -19,21 +20,6 @@ using Clock = std::chrono::steady_clock;
 
 int64_t MicrosecondsSince(Clock::time_point start) {
   return std::chrono::duration_cast<std::chrono::microseconds>(Clock::now() - start).count();
-}
-
-void CheckBackgrounds(const Rig& rig, const std::vector<cv::Mat>& backgrounds) {
-  if (backgrounds.size() != rig.cameras.size()) {
-    throw InputError("expected one background per camera (" + std::to_string(rig.cameras.size()) +
-                     "), got " + std::to_string(backgrounds.size()));
-  }
-  for (size_t i = 0; i < backgrounds.size(); ++i) {
-    const Camera& camera = rig.cameras[i];
-    if (backgrounds[i].type() != CV_8UC3 || backgrounds[i].cols != camera.width ||
-        backgrounds[i].rows != camera.height) {
-      throw InputError("background of camera '" + camera.name + "': expected 8-bit BGR of " +
-                       std::to_string(camera.width) + "x" + std::to_string(camera.height));
-    }
-  }
 }
 
 std::optional<ConfigurationSetup> CheckedConfiguration(std::optional<ConfigurationSetup> setup) {
