@@ -8,7 +8,7 @@
 #include <thread>
 
 #include "clients/controller/actuators/actuator_clock.h"
-#include "clients/controller/actuators/canopen.h"
+#include "libs/actuation/canopen.h"
 
 namespace shapesense {
 namespace {

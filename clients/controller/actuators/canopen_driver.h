@@ -25,10 +25,10 @@
 
 #include "clients/controller/actuators/actuator_driver.h"
 #include "clients/controller/actuators/actuator_options.h"
-#include "clients/controller/actuators/can_bus.h"
-#include "clients/controller/actuators/canopen.h"
-#include "clients/controller/actuators/cia402.h"
 #include "clients/controller/actuators/sdo_client.h"
+#include "libs/actuation/can_bus.h"
+#include "libs/actuation/canopen.h"
+#include "libs/actuation/cia402.h"
 
 namespace shapesense {
 

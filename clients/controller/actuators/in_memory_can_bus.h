@@ -10,7 +10,7 @@
 #include <memory>
 #include <string>
 
-#include "clients/controller/actuators/can_bus.h"
+#include "libs/actuation/can_bus.h"
 
 namespace shapesense {
 

@@ -3,7 +3,7 @@
 #include <cstdio>
 
 #include "clients/controller/actuators/actuator_clock.h"
-#include "clients/controller/actuators/canopen.h"
+#include "libs/actuation/canopen.h"
 
 namespace shapesense {
 namespace {

@@ -11,7 +11,7 @@
 #include <stdexcept>
 #include <string>
 
-#include "clients/controller/actuators/can_bus.h"
+#include "libs/actuation/can_bus.h"
 
 namespace shapesense {
 

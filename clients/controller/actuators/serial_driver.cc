@@ -5,7 +5,7 @@
 #include <thread>
 
 #include "clients/controller/actuators/actuator_clock.h"
-#include "clients/controller/actuators/line_protocol.h"
+#include "libs/actuation/line_protocol.h"
 
 namespace shapesense {
 namespace {

@@ -11,7 +11,7 @@
 #include <vector>
 
 #include "clients/controller/actuators/actuator_driver.h"
-#include "clients/controller/actuators/line_protocol.h"
+#include "libs/actuation/line_protocol.h"
 
 namespace shapesense {
 

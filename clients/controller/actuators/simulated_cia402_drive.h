@@ -20,11 +20,11 @@
 #include <optional>
 #include <thread>
 
-#include "clients/controller/actuators/axis_motion.h"
-#include "clients/controller/actuators/can_bus.h"
-#include "clients/controller/actuators/canopen.h"
-#include "clients/controller/actuators/cia402.h"
-#include "clients/controller/actuators/object_dictionary.h"
+#include "libs/actuation/axis_motion.h"
+#include "libs/actuation/can_bus.h"
+#include "libs/actuation/canopen.h"
+#include "libs/actuation/cia402.h"
+#include "libs/actuation/object_dictionary.h"
 
 namespace shapesense {
 

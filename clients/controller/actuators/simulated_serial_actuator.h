@@ -14,8 +14,8 @@
 #include <thread>
 #include <vector>
 
-#include "clients/controller/actuators/axis_motion.h"
-#include "clients/controller/actuators/line_protocol.h"
+#include "libs/actuation/axis_motion.h"
+#include "libs/actuation/line_protocol.h"
 
 namespace shapesense {
 

@@ -6,7 +6,7 @@
 #include <memory>
 #include <string>
 
-#include "clients/controller/actuators/can_bus.h"
+#include "libs/actuation/can_bus.h"
 
 namespace shapesense {
 

@@ -8,10 +8,10 @@
 
 #include <random>
 
-#include "clients/controller/actuators/canopen.h"
-#include "clients/controller/actuators/cia402.h"
 #include "clients/controller/actuators/in_memory_can_bus.h"
 #include "clients/controller/actuators/simulated_cia402_drive.h"
+#include "libs/actuation/canopen.h"
+#include "libs/actuation/cia402.h"
 
 namespace shapesense {
 namespace {

@@ -17,9 +17,9 @@
 #include <random>
 #include <thread>
 
-#include "clients/controller/actuators/line_protocol.h"
 #include "clients/controller/actuators/serial_port.h"
 #include "clients/controller/actuators/simulated_serial_actuator.h"
+#include "libs/actuation/line_protocol.h"
 #include "runtime/process/child_process.h"
 
 namespace shapesense {

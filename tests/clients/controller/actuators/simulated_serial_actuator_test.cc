@@ -8,7 +8,7 @@
 
 #include <random>
 
-#include "clients/controller/actuators/line_protocol.h"
+#include "libs/actuation/line_protocol.h"
 
 namespace shapesense {
 namespace {

@@ -1,7 +1,7 @@
 // The serial line protocol's framing: the CRC-8 check value, round trips of
 // random lines, every single-bit and single-byte error caught, and line
 // assembly independent of how the bytes are chunked.
-#include "clients/controller/actuators/line_protocol.h"
+#include "libs/actuation/line_protocol.h"
 
 #include <gtest/gtest.h>
 

@@ -7,8 +7,8 @@
 #include <array>
 #include <random>
 
-#include "clients/controller/actuators/canopen.h"
-#include "clients/controller/actuators/cia402.h"
+#include "libs/actuation/canopen.h"
+#include "libs/actuation/cia402.h"
 
 namespace shapesense {
 namespace {

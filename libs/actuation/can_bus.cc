@@ -1,4 +1,4 @@
-#include "clients/controller/actuators/can_bus.h"
+#include "libs/actuation/can_bus.h"
 
 #include <cstdio>
 

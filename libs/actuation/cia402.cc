@@ -1,4 +1,4 @@
-#include "clients/controller/actuators/cia402.h"
+#include "libs/actuation/cia402.h"
 
 namespace shapesense::cia402 {
 namespace {

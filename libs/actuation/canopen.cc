@@ -1,4 +1,4 @@
-#include "clients/controller/actuators/canopen.h"
+#include "libs/actuation/canopen.h"
 
 #include <cstdio>
 #include <map>

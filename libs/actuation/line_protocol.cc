@@ -1,4 +1,4 @@
-#include "clients/controller/actuators/line_protocol.h"
+#include "libs/actuation/line_protocol.h"
 
 #include <charconv>
 #include <cmath>

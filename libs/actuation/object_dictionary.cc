@@ -1,10 +1,10 @@
-#include "clients/controller/actuators/object_dictionary.h"
+#include "libs/actuation/object_dictionary.h"
 
 #include <algorithm>
 #include <stdexcept>
 #include <string>
 
-#include "clients/controller/actuators/canopen.h"
+#include "libs/actuation/canopen.h"
 
 namespace shapesense {
 

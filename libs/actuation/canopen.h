@@ -8,7 +8,7 @@
 #include <optional>
 #include <string>
 
-#include "clients/controller/actuators/can_bus.h"
+#include "libs/actuation/can_bus.h"
 
 namespace shapesense::canopen {
 
