@@ -31,32 +31,13 @@ GroundTruth GroundTruthFromMessage(const shape_t& truth) {
   return out;
 }
 
-DemoScorer::DemoScorer(int64_t match_tolerance_us)
-    : tolerance_us_(match_tolerance_us), live_(match_tolerance_us) {}
+DemoScorer::DemoScorer(int64_t match_tolerance_us) : live_(match_tolerance_us) {}
 
-void DemoScorer::AddTruth(const shape_t& truth) {
-  live_.AddTruth(truth);
-  truths_[truth.trigger_utime] = truth;
-}
+void DemoScorer::AddTruth(const shape_t& truth) { live_.AddTruth(truth); }
 
 void DemoScorer::AddStatus(const service_status_t& status) {
   live_.AddStatus(status);
   services_.insert(status.service);
-}
-
-const shape_t* DemoScorer::NearestTruth(int64_t trigger_utime) const {
-  const shape_t* best = nullptr;
-  int64_t best_gap = tolerance_us_ + 1;
-  const auto after = truths_.lower_bound(trigger_utime);
-  for (auto it : {after, after == truths_.begin() ? truths_.end() : std::prev(after)}) {
-    if (it == truths_.end()) continue;
-    const int64_t gap = std::llabs(it->first - trigger_utime);
-    if (gap < best_gap) {
-      best_gap = gap;
-      best = &it->second;
-    }
-  }
-  return best;
 }
 
 void DemoScorer::AddShape(const shape_t& shape, int64_t receive_utime) {
@@ -67,7 +48,7 @@ void DemoScorer::AddShape(const shape_t& shape, int64_t receive_utime) {
     ++invalid_;
     return;
   }
-  const shape_t* truth = NearestTruth(shape.trigger_utime);
+  const shape_t* truth = live_.FindTruth(shape.trigger_utime);
   if (truth == nullptr || truth->centerline.size() < 2) return;
   errors_.push_back(CompareShape(estimate, GroundTruthFromMessage(*truth)));
 }

@@ -40,11 +40,7 @@ class DemoScorer {
   DemoScore Finish(int64_t end_utime) const;
 
  private:
-  const shape_t* NearestTruth(int64_t trigger_utime) const;
-
-  int64_t tolerance_us_;
-  LiveScorer live_;
-  std::map<int64_t, shape_t> truths_;  // by trigger time
+  LiveScorer live_;                    // also pairs each shape with its truth (FindTruth)
   std::map<int64_t, shape_t> shapes_;  // by trigger sequence
   std::vector<ShapeError> errors_;
   int invalid_ = 0;

@@ -23,6 +23,9 @@ class LiveScorer {
   explicit LiveScorer(int64_t match_tolerance_us = 12'000) : tolerance_us_(match_tolerance_us) {}
 
   void AddTruth(const shape_t& truth);
+  // The truth nearest `trigger_utime` within the match tolerance; nullptr
+  // when there is none. Valid until the next AddTruth.
+  const shape_t* FindTruth(int64_t trigger_utime) const;
   // `receive_utime`: when the shape reached the monitor.
   void AddShape(const shape_t& shape, int64_t receive_utime);
   void AddStatus(const service_status_t& status);
@@ -58,8 +61,6 @@ class LiveScorer {
     double centerline_rms = 0.0;
     double tip_error = 0.0;
   };
-
-  const shape_t* FindTruth(int64_t trigger_utime) const;
 
   int64_t tolerance_us_;
   std::map<int64_t, shape_t> truths_;  // by trigger time
