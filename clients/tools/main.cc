@@ -23,10 +23,10 @@ int main(int argc, char** argv) {
   shapesense::AddEstimateCommand(app);
   shapesense::AddMonitorCommand(app);
   shapesense::AddReplayCommand(app);
+  // The subcommands run inside the parse (their callbacks), so their errors
+  // come out of it too.
   try {
-    app.parse(argc, argv);
-  } catch (const CLI::ParseError& e) {
-    return app.exit(e) == 0 ? 0 : shapesense::kExitBadInput;
+    if (const std::optional<int> code = shapesense::ParseCommandLine(app, argc, argv)) return *code;
   } catch (const shapesense::InputError& e) {
     std::cerr << "shapesense: error: " << e.what() << '\n';
     return shapesense::kExitBadInput;
