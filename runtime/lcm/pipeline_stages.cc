@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <limits>
 #include <stdexcept>
 
 #include "libs/camera/rig_yaml.h"
@@ -30,16 +31,19 @@ std::optional<ConfigurationSetup> CheckedConfiguration(std::optional<Configurati
   return setup;
 }
 
-// Extracts and compacts every camera's silhouette of decoded images.
-void ExtractAll(const SilhouetteExtractor& extractor, const std::vector<cv::Mat>& backgrounds,
-                CarvingOutput* out) {
-  const size_t n = out->images.size();
-  out->silhouettes.resize(n);
-  out->compact.views.resize(n);
-  for (size_t i = 0; i < n; ++i) {
-    extractor.Extract(out->images[i], backgrounds[i], &out->silhouettes[i]);
-    Compact(out->silhouettes[i], &out->compact.views[i], &out->compact_scratch);
+// The "silhouette" stage of a set: from the first preparation that began
+// once the set was complete (all of them, when none did) to the last end.
+stage_time_t SilhouetteStageTime(const std::vector<PreparedView>& views, int64_t complete_utime) {
+  int64_t start = std::numeric_limits<int64_t>::max();
+  int64_t earliest = start;
+  int64_t end = 0;
+  for (const PreparedView& view : views) {
+    if (view.start_utime >= complete_utime) start = std::min(start, view.start_utime);
+    earliest = std::min(earliest, view.start_utime);
+    end = std::max(end, view.end_utime);
   }
+  if (start > end) start = earliest;
+  return MakeStageTime("silhouette", end - start, end);
 }
 
 bool SameFrameSet(const voxel_cloud_t& voxels, const SilhouetteSet& silhouettes) {
@@ -72,24 +76,13 @@ std::vector<std::string> CameraNames(const Rig& rig) {
   return names;
 }
 
-std::string DecodeFrameSet(const FrameSet& set, const Rig& rig, std::vector<cv::Mat>* images) {
-  if (set.images.size() != rig.cameras.size()) {
-    return "expected " + std::to_string(rig.cameras.size()) + " images, got " +
-           std::to_string(set.images.size());
+std::string DecodeImage(const image_t& image, const Camera& camera, cv::Mat* bgr) {
+  if (image.width != camera.width || image.height != camera.height) {
+    return camera.name + ": expected " + std::to_string(camera.width) + "x" +
+           std::to_string(camera.height) + " (the rig's), got " + std::to_string(image.width) +
+           "x" + std::to_string(image.height);
   }
-  images->resize(set.images.size());
-  for (size_t i = 0; i < set.images.size(); ++i) {
-    const Camera& camera = rig.cameras[i];
-    const image_t& image = set.images[i];
-    if (image.width != camera.width || image.height != camera.height) {
-      return camera.name + ": expected " + std::to_string(camera.width) + "x" +
-             std::to_string(camera.height) + " (the rig's), got " + std::to_string(image.width) +
-             "x" + std::to_string(image.height);
-    }
-    std::string error = ImageMessageToBgr(image, &(*images)[i], ImageCopy::kViewWhenPossible);
-    if (!error.empty()) return error;
-  }
-  return {};
+  return ImageMessageToBgr(image, bgr, ImageCopy::kViewWhenPossible);
 }
 
 std::vector<stage_time_t> FrameSetStageTimes(const FrameSet& set) {
@@ -114,14 +107,43 @@ CarvingStage::CarvingStage(const Rig& rig, std::vector<cv::Mat> backgrounds,
       extractor_(silhouette),
       carver_(rig, carving, table_progress) {}
 
-std::string CarvingStage::Process(const FrameSet& set, CarvingOutput* out) const {
-  auto start = Clock::now();
-  if (std::string error = DecodeFrameSet(set, rig_, &out->images); !error.empty()) return error;
-  ExtractAll(extractor_, backgrounds_, out);
-  const int64_t silhouette_us = MicrosecondsSince(start);
-  const int64_t silhouette_end = NowUtime();
+std::string CarvingStage::PrepareView(size_t camera, const image_t& image, PreparedView* view,
+                                      CompactScratch* scratch) const {
+  view->start_utime = NowUtime();
+  view->end_utime = 0;
+  if (camera >= rig_.cameras.size()) return "no camera " + std::to_string(camera) + " in the rig";
+  cv::Mat bgr;
+  if (std::string error = DecodeImage(image, rig_.cameras[camera], &bgr); !error.empty()) {
+    return error;
+  }
+  extractor_.Extract(bgr, backgrounds_[camera], &view->silhouette);
+  Compact(view->silhouette, &view->compact, scratch);
+  view->end_utime = NowUtime();
+  return {};
+}
 
-  start = Clock::now();
+std::string CarvingStage::Carve(const FrameSet& set, std::vector<PreparedView>* views,
+                                CarvingOutput* out) const {
+  const size_t n = rig_.cameras.size();
+  if (set.images.size() != n || views->size() != n) {
+    return "expected " + std::to_string(n) + " images, got " + std::to_string(set.images.size());
+  }
+  for (size_t k = 0; k < n; ++k) {
+    PreparedView& view = (*views)[k];
+    if (view.end_utime > 0) continue;
+    if (std::string error = PrepareView(k, set.images[k], &view, &out->compact_scratch);
+        !error.empty()) {
+      return error;
+    }
+  }
+  out->silhouettes.resize(n);
+  out->compact.views.resize(n);
+  for (size_t k = 0; k < n; ++k) {
+    std::swap(out->silhouettes[k], (*views)[k].silhouette);
+    std::swap(out->compact.views[k], (*views)[k].compact);
+  }
+
+  const auto start = Clock::now();
   carver_.CarveHierarchical(out->silhouettes, &out->cloud);
   const int64_t carving_us = MicrosecondsSince(start);
 
@@ -129,7 +151,7 @@ std::string CarvingStage::Process(const FrameSet& set, CarvingOutput* out) const
   out->message.trigger_seq = set.trigger_seq;
   out->message.trigger_utime = set.trigger_utime;
   out->message.stage_times = FrameSetStageTimes(set);
-  out->message.stage_times.push_back(MakeStageTime("silhouette", silhouette_us, silhouette_end));
+  out->message.stage_times.push_back(SilhouetteStageTime(*views, set.complete_utime));
   out->message.stage_times.push_back(MakeStageTime("carving", carving_us, NowUtime()));
   out->message.num_stage_times = static_cast<int32_t>(out->message.stage_times.size());
 
@@ -137,6 +159,12 @@ std::string CarvingStage::Process(const FrameSet& set, CarvingOutput* out) const
   out->compact.trigger_utime = set.trigger_utime;
   SilhouettesToMessage(rig_, out->compact, &out->silhouettes_message);
   return {};
+}
+
+std::string CarvingStage::Process(const FrameSet& set, CarvingOutput* out) const {
+  out->views.resize(set.images.size());
+  for (PreparedView& view : out->views) view.end_utime = 0;
+  return Carve(set, &out->views, out);
 }
 
 ShapeStage::ShapeStage(const Rig& rig, const ShapeOptions& shape,
@@ -177,14 +205,14 @@ std::string ShapeStage::Process(const voxel_cloud_t& voxels, const SilhouetteSet
   if (std::string error = VoxelCloudFromMessage(voxels, &out->cloud); !error.empty()) return error;
   const auto start = Clock::now();
   out->warning.clear();
-  out->silhouettes.clear();
+  out->refined = false;
   if (wants_silhouettes_) {
-    if (const std::string error = ExpandSilhouettes(voxels, silhouettes, out); !error.empty()) {
-      out->warning = "silhouettes: " + error + "; shape not refined";
-      out->silhouettes.clear();
-    }
+    const std::string error = ExpandSilhouettes(voxels, silhouettes, out);
+    out->refined = error.empty();
+    if (!out->refined) out->warning = "silhouettes: " + error + "; shape not refined";
   }
-  out->estimate = estimator_.Estimate(out->cloud, out->silhouettes);
+  static const std::vector<Silhouette> kNone;
+  out->estimate = estimator_.Estimate(out->cloud, out->refined ? out->silhouettes : kNone);
   SenseConfigurationOf(out);
   const int64_t shape_us = MicrosecondsSince(start);
 

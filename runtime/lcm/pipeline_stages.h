@@ -15,6 +15,7 @@
 #include "libs/carving/carver.h"
 #include "libs/centerline/shape_estimator.h"
 #include "libs/mechanics/configuration_sensing.h"
+#include "libs/silhouette/compact_silhouette.h"
 #include "libs/silhouette/silhouette.h"
 #include "runtime/config_file.h"
 #include "runtime/lcm/frame_set_assembler.h"
@@ -39,15 +40,26 @@ RigSetup LoadRigSetup(const std::filesystem::path& rig_file,
 
 std::vector<std::string> CameraNames(const Rig& rig);
 
-// Decodes a frame-set's images to 8-bit BGR of their camera's size, in rig
-// order (raw BGR8 images become views of the set's bytes). "" or the reason.
-std::string DecodeFrameSet(const FrameSet& set, const Rig& rig, std::vector<cv::Mat>* images);
+// Decodes an image of `camera` to 8-bit BGR of the camera's size (a raw BGR8
+// image becomes a view of the message's bytes). "" or the reason.
+std::string DecodeImage(const image_t& image, const Camera& camera, cv::Mat* bgr);
 
 // The stage times a frame-set brings: those of its images merged by name
 // (a stage of the set lasted as long as its slowest image), plus
 // "transport": the longest time from an image's publication to its arrival,
 // ending when the set was complete.
 std::vector<stage_time_t> FrameSetStageTimes(const FrameSet& set);
+
+// One image reduced to what carving needs of it: its silhouette, and the
+// silhouette compacted for the shape stage. The carving service prepares
+// each image as it arrives, while the rest of its frame-set is still on the
+// way, so a set's carving waits for its last image's silhouette only.
+struct PreparedView {
+  Silhouette silhouette;
+  CompactSilhouette compact;
+  int64_t start_utime = 0;  // decoding began
+  int64_t end_utime = 0;    // compaction ended
+};
 
 // What CarvingStage produces; kept between frame-sets so buffers are reused.
 struct CarvingOutput {
@@ -57,13 +69,14 @@ struct CarvingOutput {
   SilhouetteSet compact;
   silhouettes_t silhouettes_message;
   std::vector<Silhouette> silhouettes;
-  CompactScratch compact_scratch;
-  std::vector<cv::Mat> images;
+  std::vector<PreparedView> views;  // Process's
+  CompactScratch compact_scratch;   // Process's
   VoxelCloud cloud;
 };
 
-// Decode, silhouettes ("silhouette": decoding, extraction and compaction of
-// every camera), hierarchical carving ("carving").
+// Decode and silhouettes (PrepareView, per image), hierarchical carving
+// (Carve). Stage times: "silhouette", from the first preparation the
+// complete set still waited for to the last one's end, and "carving".
 class CarvingStage {
  public:
   // Builds the carver's lookup table (about 1 s at 256³ voxels). Throws
@@ -73,8 +86,22 @@ class CarvingStage {
                const SilhouetteOptions& silhouette, const CarvingOptions& carving,
                const ProgressCallback& table_progress = {});
 
-  // "" on success, else why the set could not be carved (an image that does
-  // not decode or does not fit its camera); `out->message` is then stale.
+  // Decodes `image`, the image of the rig's camera `camera`, then extracts
+  // and compacts its silhouette. "" or why the image cannot be used (it does
+  // not decode, or does not fit the camera). Thread-safe: the scratch is the
+  // caller's.
+  std::string PrepareView(size_t camera, const image_t& image, PreparedView* view,
+                          CompactScratch* scratch) const;
+
+  // Carves `set` from its images' views: (*views)[k] prepared from
+  // set.images[k], or empty (`end_utime` 0) to be prepared here. The views
+  // are swapped into `out`, and come back holding its earlier buffers. ""
+  // on success, else why the set could not be carved; `out->message` is then
+  // stale.
+  std::string Carve(const FrameSet& set, std::vector<PreparedView>* views,
+                    CarvingOutput* out) const;
+
+  // Carve with every view prepared here (replay, tests).
   std::string Process(const FrameSet& set, CarvingOutput* out) const;
 
   const Rig& rig() const { return rig_; }
@@ -102,7 +129,10 @@ struct ShapeOutput {
   // Set when the shape was measured without the silhouettes it should have
   // had (they were missing or malformed): the reason.
   std::string warning;
-  std::vector<Silhouette> silhouettes;  // expanded from the set's compact ones
+  // Expanded from the set's compact ones; the buffers are kept between
+  // calls, since an expansion into an earlier one clears only what that wrote.
+  std::vector<Silhouette> silhouettes;
+  bool refined = false;  // the estimate used `silhouettes`
   VoxelCloud cloud;
 };
 

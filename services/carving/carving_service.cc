@@ -41,10 +41,18 @@ CarvingService::CarvingService(const CarvingServiceOptions& options, RigSetup se
       hooks_(std::move(hooks)),
       stage_(setup.rig, std::move(setup.backgrounds), options.silhouette, options.carving),
       assembler_(CameraNames(setup.rig), options.assembly),
-      worker_(options.queue_capacity, status_, "frame-set", FrameSetName, [this](FrameSet& set) {
-        if (hooks_.before_carving) hooks_.before_carving(set);
-        CarveAndPublish(set);
-      }) {
+      // A view for every image the pending sets can hold, and one more.
+      prepared_(static_cast<size_t>(options.assembly.max_pending + 1) *
+                stage_.rig().cameras.size()),
+      // The views of the sets the queue and the worker hold, and one set more.
+      view_pool_(static_cast<size_t>(options.queue_capacity + 2) * stage_.rig().cameras.size()),
+      worker_(
+          options.queue_capacity, status_, "frame-set",
+          [](const CarvingJob& job) { return FrameSetName(job.set); },
+          [this](CarvingJob& job) {
+            if (hooks_.before_carving) hooks_.before_carving(job.set);
+            CarveAndPublish(job);
+          }) {
   SubscribeToImages(CameraNames(stage_.rig()));
 }
 
@@ -95,19 +103,45 @@ void CarvingService::OnImage(image_t&& image, const std::string& channel,
     status_.Note(channel + ": image names camera '" + image.camera + "'");
     return;
   }
+  std::optional<PreparedView> view = PrepareOnArrival(image);
   // Kept for the note on a rejection (the image moves into the assembler).
   const std::string camera = image.camera;
   const int64_t trigger_seq = image.trigger_seq;
+  const int camera_index = RigIndex(image.camera);
+  const ImageIdentity identity = IdentityOf(static_cast<size_t>(camera_index), image);
   const int64_t dropped_before = assembler_.counters().DroppedSets();
   AssemblyResult result = assembler_.Add(std::move(image), receive_utime);
   CountAssemblyDrops(dropped_before);
+  const bool accepted =
+      result.outcome == AssemblyOutcome::kPending || result.outcome == AssemblyOutcome::kCompleted;
+  if (accepted && view) prepared_.Keep(identity, std::move(*view));
   if (result.outcome == AssemblyOutcome::kCompleted) {
-    worker_.Push(std::move(*result.completed));
+    CarvingJob job{std::move(*result.completed), {}};
+    job.views = prepared_.Take(job.set);
+    worker_.Push(std::move(job));
   } else if (IsRejection(result.outcome)) {
     status_.Rejected();
     status_.Note(camera + ": " + AssemblyOutcomeName(result.outcome) + " (trigger " +
                  std::to_string(trigger_seq) + ")");
   }
+}
+
+int CarvingService::RigIndex(const std::string& camera) const {
+  const std::vector<Camera>& cameras = stage_.rig().cameras;
+  for (size_t k = 0; k < cameras.size(); ++k) {
+    if (cameras[k].name == camera) return static_cast<int>(k);
+  }
+  return -1;
+}
+
+std::optional<PreparedView> CarvingService::PrepareOnArrival(const image_t& image) {
+  const int camera = RigIndex(image.camera);
+  if (camera < 0) return std::nullopt;  // the assembler refuses it
+  PreparedView view = view_pool_.Take();
+  if (!stage_.PrepareView(static_cast<size_t>(camera), image, &view, &compact_scratch_).empty()) {
+    return std::nullopt;
+  }
+  return view;
 }
 
 void CarvingService::CountAssemblyDrops(int64_t before) {
@@ -134,8 +168,9 @@ service_status_t CarvingService::Status(int64_t now_utime) {
   return status_.Snapshot(now_utime, rejected);
 }
 
-void CarvingService::CarveAndPublish(const FrameSet& set) {
-  if (const std::string error = stage_.Process(set, &output_); !error.empty()) {
+void CarvingService::CarveAndPublish(CarvingJob& job) {
+  const FrameSet& set = job.set;
+  if (const std::string error = stage_.Carve(set, &job.views, &output_); !error.empty()) {
     status_.Error(FrameSetName(set) + ": " + error);
     return;
   }

@@ -1,11 +1,14 @@
 #pragma once
 
-// shapesense-carving: camera images → frame-sets → silhouettes → voxel
-// cloud, over LCM. The LCM callback only checks and assembles (it never
-// blocks or throws); a bounded queue hands complete frame-sets to one
-// worker, dropping the oldest on overload.
+// shapesense-carving: camera images → silhouettes → frame-sets → voxel
+// cloud, over LCM. The LCM callback checks each image, extracts its
+// silhouette while the rest of its frame-set is still on the way, and
+// assembles (it never blocks or throws); a bounded queue hands complete
+// frame-sets with their silhouettes to one worker, which carves; on
+// overload the oldest set is dropped.
 #include <atomic>
 #include <functional>
+#include <optional>
 #include <ostream>
 #include <string>
 #include <vector>
@@ -19,6 +22,7 @@
 #include "runtime/lcm/service_main.h"
 #include "runtime/lcm/service_status.h"
 #include "runtime/lcm/service_worker.h"
+#include "services/carving/prepared_views.h"
 
 namespace shapesense {
 
@@ -51,6 +55,12 @@ struct CarvingServiceOptions {
     visit("lcm_url", lcm_url, "LCM provider URL (empty: LCM_DEFAULT_URL or LCM's default)");
   }
   std::string Validate() const;
+};
+
+// A complete frame-set and the views prepared of its images on arrival.
+struct CarvingJob {
+  FrameSet set;
+  std::vector<PreparedView> views;
 };
 
 // Seams for tests; empty in the service.
@@ -90,8 +100,13 @@ class CarvingService {
   // `camera`: the camera whose bus it came on, or "" on the shared bus.
   void OnImage(image_t&& image, const std::string& channel, const std::string& camera,
                int64_t receive_utime);
+  // The camera's index in the rig, or -1.
+  int RigIndex(const std::string& camera) const;
+  // The view of an image about to be assembled, or nullopt when it does not
+  // decode (its set, if it completes, reports the error when carved).
+  std::optional<PreparedView> PrepareOnArrival(const image_t& image);
   void CountAssemblyDrops(int64_t before);
-  void CarveAndPublish(const FrameSet& set);
+  void CarveAndPublish(CarvingJob& job);
   void MaybePublishSilhouettes(const FrameSet& set);
 
   CarvingServiceOptions options_;
@@ -99,13 +114,16 @@ class CarvingService {
   ImageBuses image_buses_;
   CarvingServiceHooks hooks_;
   CarvingStage stage_;
-  FrameSetAssembler assembler_;  // the bus thread's
+  FrameSetAssembler assembler_;     // the bus thread's
+  PreparedViews prepared_;          // the bus thread's
+  CompactScratch compact_scratch_;  // the bus thread's
+  ViewPool view_pool_;              // shared by the bus thread and the worker
   ServiceStatus status_{"carving"};
   CarvingOutput output_;  // the worker's, reused
   int64_t voxels_seq_ = 0;
   int64_t silhouette_seq_ = 0;
   int64_t last_silhouette_utime_ = 0;
-  ServiceWorker<FrameSet> worker_;  // last: see ServiceWorker
+  ServiceWorker<CarvingJob> worker_;  // last: see ServiceWorker
 };
 
 // The config with the command line's overrides, paths resolved, validated.

@@ -14,8 +14,10 @@ namespace {
 // Points in time of one frame-set, µs on the host clock, in pipeline order.
 struct Timeline {
   int64_t trigger = 0;
-  int64_t set_complete = 0;      // carving service: LCM's receive time of the set's last image
-  int64_t silhouette_start = 0;  // its worker took the set
+  int64_t set_complete = 0;  // carving service: LCM's receive time of the set's last image
+  // The silhouettes the complete set still waited for (those of its last
+  // image, the others were extracted as their images arrived).
+  int64_t silhouette_start = 0;
   int64_t silhouette_end = 0;
   int64_t carving_end = 0;  // voxel cloud built (publishing follows)
   int64_t shape_start = 0;  // shape service's worker took the cloud
@@ -82,8 +84,8 @@ Percentiles Summarize(std::vector<double> values) {
 
 LatencyBreakdown BreakDown(const std::vector<ShapeSample>& samples) {
   LatencyBreakdown b;
-  b.names = {"publish + kernel, to carving", "carving: LCM, assembly, queue",
-             "carving: silhouettes",         "carving: carve + message",
+  b.names = {"publish + kernel, to carving", "carving: LCM, last image",
+             "carving: its silhouette",      "carving: assembly, queue, carve",
              "voxels -> shape worker",       "shape: silhouettes + estimate",
              "shape -> bench socket"};
   b.segments.resize(b.names.size());

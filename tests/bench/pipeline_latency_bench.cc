@@ -227,17 +227,20 @@ void Play(FrameSetPlayer& player, double rate_hz, int64_t ticks, StepResult* res
   result->achieved_hz = rate_hz * static_cast<double>(result->sent) / static_cast<double>(ticks);
 }
 
-// Waits (bounded) for the shapes of the step; then for statuses published
-// after the pipeline went quiet (a set that lost an image times out in the
-// carving service's assembly after 200 ms, an unpaired cloud in the shape
-// service after 500 ms: 1.5 s covers both).
+// Waits (bounded) for the shapes of the step, and takes the processes' CPU
+// figures when they are in (the wait for statuses after it is the bench's,
+// and would charge the services' idle time to the step's frame-sets); then
+// waits for statuses published after the pipeline went quiet (a set that
+// lost an image times out in the carving service's assembly after 200 ms,
+// an unpaired cloud in the shape service after 500 ms: 1.5 s covers both).
 void Drain(const PipelineListener& listener, StepResult* result) {
   const auto end = Clock::now() + milliseconds(1500);
   const int64_t last = result->first_seq + result->sent;
   while (Clock::now() < end &&
          listener.CountShapes(result->first_seq, last) < static_cast<size_t>(result->sent)) {
-    std::this_thread::sleep_for(milliseconds(5));
+    std::this_thread::sleep_for(milliseconds(1));
   }
+  result->probe_after = ProbeProcesses(kLcmPort);
   result->status_fresh = WaitForStatuses(listener, NowUtime(), milliseconds(3000));
   result->shapes = listener.Shapes(result->first_seq, last);
   for (const ShapeSample& shape : result->shapes) result->invalid_shapes += shape.valid ? 0 : 1;
@@ -254,7 +257,6 @@ StepResult RunStep(FrameSetPlayer& player, const PipelineListener& listener, dou
   Play(player, rate_hz, std::max<int64_t>(2, std::llround(rate_hz * seconds)), &result);
   *next_seq += result.sent;
   Drain(listener, &result);
-  result.probe_after = ProbeProcesses(kLcmPort);
   const ServiceSnapshot after = Snapshot(listener);
   result.carving = Difference(after.carving, before.carving);
   result.shape = Difference(after.shape, before.shape);

@@ -202,6 +202,41 @@ TEST_F(CarvingServiceTest, FrameSetsThatCannotBeCarvedAreCountedAsErrors) {
   EXPECT_EQ(status.published, 1);
 }
 
+// The silhouettes are extracted as each image arrives, and found again by
+// the image's identity when its set completes: interleaved sets, reversed
+// arrival and a duplicate carrying other pixels change nothing, each cloud
+// is the one its own set carves to at once.
+TEST_F(CarvingServiceTest, SilhouettesExtractedOnArrivalBelongToTheirOwnImages) {
+  const CarvingServiceOptions options = testing::TestCarvingOptions();
+  CarvingService service(options, rig_->Setup(), bus_);
+  SubscribeVoxels();
+  const int64_t utime = NowUtime();
+  const std::vector<image_t> first = rig_->Messages(0, 20, utime);
+  const std::vector<image_t> second = rig_->Messages(1, 21, utime + 10000);
+  image_t impostor = rig_->Messages(2, 20, utime)[0];  // the identity of first[0], other pixels
+  impostor.frame_id = first[0].frame_id;
+  impostor.device_timestamp_ns = first[0].device_timestamp_ns;
+  Publish({first[0], impostor, second[2], first[2], second[1], second[0], first[1]});
+  ASSERT_TRUE(HandleUntilClouds(service, 2));
+
+  const RigSetup setup = rig_->Setup();
+  const CarvingStage stage(setup.rig, setup.backgrounds, options.silhouette, options.carving);
+  for (const auto& [images, cloud] :
+       {std::pair{&first, &clouds_[1]}, std::pair{&second, &clouds_[0]}}) {
+    FrameSet set;
+    set.trigger_seq = (*images)[0].trigger_seq;
+    set.trigger_utime = (*images)[0].trigger_utime;
+    set.images = *images;
+    CarvingOutput expected;
+    ASSERT_EQ(stage.Process(set, &expected), "");
+    EXPECT_EQ(cloud->trigger_seq, set.trigger_seq);
+    EXPECT_EQ(cloud->voxels, expected.message.voxels) << "frame-set " << set.trigger_seq;
+  }
+  const service_status_t status = service.Status(NowUtime());
+  EXPECT_EQ(status.rejected, 1) << "the impostor, a duplicate of first[0]";
+  EXPECT_EQ(status.errors + status.dropped, 0) << status.last_error;
+}
+
 TEST_F(CarvingServiceTest, OverloadDropsTheOldestFrameSetsAndCountsThem) {
   CarvingServiceOptions options = testing::TestCarvingOptions();
   options.queue_capacity = 2;
