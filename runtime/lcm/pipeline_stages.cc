@@ -8,9 +8,12 @@
 #include "libs/camera/rig_yaml.h"
 #include "libs/core/error.h"
 #include "runtime/file_io.h"
+#include "runtime/lcm/image_codec.h"
 #include "runtime/lcm/lcm_bus.h"
-#include "runtime/lcm/message_convert.h"
+#include "runtime/lcm/shape_message.h"
 #include "runtime/lcm/silhouette_message.h"
+#include "runtime/lcm/stage_times.h"
+#include "runtime/lcm/voxel_cloud_message.h"
 #include "runtime/sensing_pipeline.h"
 
 namespace shapesense {

@@ -2,7 +2,7 @@
 
 #include <stdexcept>
 
-#include "runtime/lcm/message_convert.h"
+#include "runtime/lcm/image_codec.h"
 
 namespace shapesense {
 namespace {

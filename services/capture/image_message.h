@@ -1,6 +1,6 @@
 #pragma once
 
-// Camera frames as image_t messages (runtime/lcm/message_convert.h decodes them).
+// Camera frames as image_t messages (runtime/lcm/image_codec.h decodes them).
 
 #include <cstdint>
 #include <string>

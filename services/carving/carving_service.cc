@@ -2,7 +2,7 @@
 
 #include "libs/core/error.h"
 #include "runtime/lcm/channels.h"
-#include "runtime/lcm/message_convert.h"
+#include "runtime/lcm/image_codec.h"
 #include "runtime/lcm/service_config.h"
 #include "runtime/lcm/service_loop.h"
 

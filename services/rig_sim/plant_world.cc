@@ -14,7 +14,7 @@
 #include "runtime/config_file.h"
 #include "runtime/file_io.h"
 #include "runtime/lcm/channels.h"
-#include "runtime/lcm/message_convert.h"
+#include "runtime/lcm/shape_message.h"
 #include "runtime/lcm/truth_message.h"
 
 namespace shapesense {
@@ -31,13 +31,6 @@ std::string ExpectWithin(const std::string& key, double value, double low, doubl
   if (std::isfinite(value) && above && value <= high) return "";
   return key + ": expected a number in " + (low_open ? "(" : "[") + Number(low) + ", " +
          Number(high) + "], got " + Number(value);
-}
-
-std::string ExpectFinite(const std::string& key, const std::array<double, 3>& values) {
-  for (const double value : values) {
-    if (!std::isfinite(value)) return key + ": expected finite numbers, got " + Number(value);
-  }
-  return "";
 }
 
 Eigen::VectorXd Initial(const ManipulatorOptions& model, const PlantWorldOptions& options) {
@@ -68,7 +61,7 @@ std::string Misfit(const ManipulatorOptions& model, const PlantWorldOptions& opt
            std::to_string(options.initial_displacements.size());
   }
   const SectionLengths rest{model.proximal_length, model.distal_length};
-  const ManipulatorGeometry geometry{rest, options.WorldFromBase(), options.scene.tapes};
+  const ManipulatorGeometry geometry{rest, options.base.WorldFromBase(), options.scene.tapes};
   if (const std::string error = geometry.Validate(); !error.empty()) return "scene." + error;
   const TendonPlant start(model, options.plant, Initial(model, options));
   if (!WithinLimits(start.configuration(), rest, options)) {
@@ -127,8 +120,7 @@ std::string PlantWorldOptions::Validate() const {
     }
   }
   for (const std::string& error :
-       {ExpectFinite("base_position", base_position), ExpectFinite("base_rotation", base_rotation),
-        ExpectWithin("actuator_speed", actuator_speed, 0.0, 1e6),
+       {base.Validate(), ExpectWithin("actuator_speed", actuator_speed, 0.0, 1e6),
         ExpectWithin("max_strain", max_strain, 0.0, 0.9, /*low_open=*/true),
         ExpectWithin("max_bend_angle", max_bend_angle, 0.0, 4.0 * std::numbers::pi, true),
         ExpectWithin("state_rate_hz", state_rate_hz, 1.0, 1000.0),
@@ -136,10 +128,6 @@ std::string PlantWorldOptions::Validate() const {
     if (!error.empty()) return error;
   }
   return "";
-}
-
-Pose3 PlantWorldOptions::WorldFromBase() const {
-  return PoseFromRotationVector(Vec3(base_rotation.data()), Vec3(base_position.data()));
 }
 
 PlantWorldSetup LoadPlantWorldSetup(const std::filesystem::path& config_file) {
@@ -159,7 +147,7 @@ PlantWorld::PlantWorld(const ManipulatorOptions& nominal, const PlantWorldOption
     : options_(Checked(nominal, options)),
       num_tendons_(static_cast<int>(nominal.tendons.size())),
       rest_{nominal.proximal_length, nominal.distal_length},
-      world_from_base_(options.WorldFromBase()),
+      world_from_base_(options.base.WorldFromBase()),
       plant_(nominal, options.plant, Initial(nominal, options)),
       target_(plant_.commanded()),
       now_(kNever),

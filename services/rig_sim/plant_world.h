@@ -31,6 +31,7 @@
 #include <vector>
 
 #include "libs/geometry/types.h"
+#include "libs/mechanics/base_pose.h"
 #include "libs/mechanics/manipulator_options.h"
 #include "libs/sim/manipulator_scene.h"
 #include "libs/sim/tendon_plant.h"
@@ -48,12 +49,9 @@ struct PlantWorldOptions {
   // config file's folder; the plant is drawn from it and `plant`.
   std::string manipulator = "manipulator.yaml";
   TendonPlantOptions plant;
-  // world_from_base exactly as the shape service's `configuration:` section
-  // has it (services/shape/shape_service.h): x_world = R x_base +
-  // base_position (mm), R the rotation by the rotation vector base_rotation.
-  // Keep the two equal, or the sensed q is not the plant's.
-  std::array<double, 3> base_position = {0.0, 0.0, 0.0};
-  std::array<double, 3> base_rotation = {0.0, 0.0, 0.0};
+  // world_from_base: the same keys as the shape service's `configuration:`
+  // section. Keep the two equal, or the sensed q is not the plant's.
+  BasePose base;
   ManipulatorSceneOptions scene;
   // Where the actuators stand at the start, mm (empty: every one at 0).
   std::vector<double> initial_displacements;
@@ -74,12 +72,7 @@ struct PlantWorldOptions {
     visit("manipulator", manipulator,
           "the controller's model file (config/manipulator.yaml), relative to this file");
     visit("plant", plant, "how the plant differs from the model: stiffness factors, tendon play");
-    visit("base_position", base_position,
-          "world_from_base: the base's origin in the world, mm (as the shape service's "
-          "configuration.base_position)");
-    visit("base_rotation", base_rotation,
-          "world_from_base: rotation vector (axis * angle, rad), as the shape service's "
-          "configuration.base_rotation");
+    base.VisitFields(visit);
     visit("scene", scene, "how the manipulator is drawn: radius, visible body, tape bands");
     visit("initial_displacements", initial_displacements,
           "actuator positions at the start, mm, one per tendon (empty: all 0)");
@@ -96,7 +89,6 @@ struct PlantWorldOptions {
           "no command for this long stops the actuators where they stand, s (>= 0; 0: never)");
   }
   std::string Validate() const;
-  Pose3 WorldFromBase() const;
 };
 
 // The options and the model they name, read and checked together.

@@ -8,10 +8,10 @@
 #include "libs/mechanics/manipulator_options.h"
 #include "runtime/file_io.h"
 #include "runtime/lcm/channels.h"
-#include "runtime/lcm/message_convert.h"
 #include "runtime/lcm/service_config.h"
 #include "runtime/lcm/service_loop.h"
 #include "runtime/lcm/silhouette_message.h"
+#include "runtime/lcm/voxel_cloud_message.h"
 
 namespace shapesense {
 namespace {
@@ -48,10 +48,6 @@ std::optional<ConfigurationSetup> MatchingConfiguration(
   return configuration;
 }
 
-bool AllFinite(const std::array<double, 3>& values) {
-  return std::all_of(values.begin(), values.end(), [](double v) { return std::isfinite(v); });
-}
-
 }  // namespace
 
 std::string ShapeConfigurationOptions::Validate() const {
@@ -59,15 +55,10 @@ std::string ShapeConfigurationOptions::Validate() const {
     return "manipulator: expected the manipulator model file (configuration is enabled), got "
            "nothing";
   }
-  if (!AllFinite(base_position)) return "base_position: expected finite numbers";
-  if (!AllFinite(base_rotation)) return "base_rotation: expected finite numbers";
+  if (const std::string error = base.Validate(); !error.empty()) return error;
   if (const std::string error = tapes.Validate(); !error.empty()) return "tapes." + error;
   if (const std::string error = sensing.Validate(); !error.empty()) return "sensing." + error;
   return {};
-}
-
-Pose3 ShapeConfigurationOptions::WorldFromBase() const {
-  return PoseFromRotationVector(Vec3(base_rotation.data()), Vec3(base_position.data()));
 }
 
 std::optional<ConfigurationSetup> LoadConfigurationSetup(const ShapeServiceOptions& options) {
@@ -77,7 +68,7 @@ std::optional<ConfigurationSetup> LoadConfigurationSetup(const ShapeServiceOptio
       ParseManipulatorYaml(ReadTextFile(section.manipulator), section.manipulator);
   ConfigurationSetup setup;
   setup.geometry.rest = {model.proximal_length, model.distal_length};
-  setup.geometry.world_from_base = section.WorldFromBase();
+  setup.geometry.world_from_base = section.base.WorldFromBase();
   setup.geometry.tapes = section.tapes;
   setup.options = section.sensing;
   if (const std::string error = setup.geometry.Validate(); !error.empty()) {

@@ -16,6 +16,7 @@
 #include <string>
 
 #include "libs/centerline/shape_estimator.h"
+#include "libs/mechanics/base_pose.h"
 #include "libs/mechanics/configuration_sensing.h"
 #include "runtime/lcm/lcm_bus.h"
 #include "runtime/lcm/pipeline_stages.h"
@@ -34,12 +35,9 @@ struct ShapeConfigurationOptions {
   // The manipulator model file (its rest lengths L0, L1; config/manipulator.yaml),
   // relative to the config file's folder.
   std::string manipulator;
-  // world_from_base, the base frame in the cameras' world: x_world =
-  // R x_base + base_position (mm), R the rotation by the rotation vector
-  // base_rotation (unit axis times angle, rad). The base frame's y axis runs
-  // along the manipulator: [1.5707963267948966, 0, 0] turns it onto world +z.
-  std::array<double, 3> base_position = {0.0, 0.0, 0.0};
-  std::array<double, 3> base_rotation = {0.0, 0.0, 0.0};
+  // world_from_base, the base frame in the cameras' world (the keys
+  // base_position and base_rotation, as the virtual rig's plant has them).
+  BasePose base;
   TapeLayout tapes;
   ConfigurationSensingOptions sensing;
 
@@ -48,15 +46,11 @@ struct ShapeConfigurationOptions {
     visit("enabled", enabled, "sense q (else has_configuration is false)");
     visit("manipulator", manipulator,
           "manipulator model file (rest lengths), relative to this file; needed when enabled");
-    visit("base_position", base_position, "world_from_base: the base's origin in the world, mm");
-    visit("base_rotation", base_rotation,
-          "world_from_base: rotation vector (axis * angle, rad); [1.5707963267948966, 0, 0] "
-          "turns the base's y axis (along the manipulator) onto world +z");
+    base.VisitFields(visit);
     visit("tapes", tapes, "tape bands: at the junction, before the tip, optionally proximal");
     visit("sensing", sensing, "measuring the sections and fitting the arc");
   }
   std::string Validate() const;
-  Pose3 WorldFromBase() const;
 };
 
 // config/shape_service.yaml documents every key.

@@ -6,7 +6,7 @@
 #include <numeric>
 #include <optional>
 
-#include "runtime/lcm/message_convert.h"
+#include "runtime/lcm/stage_times.h"
 
 namespace shapesense::bench {
 namespace {

@@ -26,7 +26,6 @@
 #include "clients/tools/demo/demo_session.h"
 #include "libs/sim/scene_generators.h"
 #include "runtime/lcm/channels.h"
-#include "runtime/lcm/message_convert.h"
 #include "shapesense/configuration_target_t.hpp"
 #include "shapesense/tendon_command_t.hpp"
 #include "tests/e2e/live_pipeline.h"

@@ -12,7 +12,6 @@
 
 #include "runtime/lcm/channels.h"
 #include "runtime/lcm/image_buses.h"
-#include "runtime/lcm/message_convert.h"
 #include "runtime/lcm/silhouette_message.h"
 #include "tests/e2e/live_pipeline.h"
 #include "tests/support/network_test.h"

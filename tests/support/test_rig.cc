@@ -7,7 +7,8 @@
 #include "libs/geometry/polyline.h"
 #include "libs/sim/scene_generators.h"
 #include "runtime/dataset.h"
-#include "runtime/lcm/message_convert.h"
+#include "runtime/lcm/image_codec.h"
+#include "runtime/lcm/stage_times.h"
 
 namespace shapesense::testing {
 namespace {

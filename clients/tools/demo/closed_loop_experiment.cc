@@ -16,7 +16,7 @@
 #include "libs/sim/scene_generators.h"
 #include "runtime/file_io.h"
 #include "runtime/lcm/channels.h"
-#include "runtime/lcm/message_convert.h"
+#include "runtime/lcm/shape_message.h"
 #include "shapesense/configuration_target_t.hpp"
 #include "shapesense/tendon_command_t.hpp"
 

@@ -2,7 +2,7 @@
 
 #include <cstdlib>
 
-#include "runtime/lcm/message_convert.h"
+#include "runtime/lcm/shape_message.h"
 
 namespace shapesense {
 namespace {

@@ -10,7 +10,7 @@
 #include <random>
 
 #include "libs/sim/scene_generators.h"
-#include "runtime/lcm/message_convert.h"
+#include "runtime/lcm/shape_message.h"
 
 namespace shapesense {
 namespace {

@@ -16,7 +16,6 @@
 #include "libs/core/error.h"
 #include "runtime/file_io.h"
 #include "runtime/lcm/channels.h"
-#include "runtime/lcm/message_convert.h"
 #include "runtime/lcm/service_config.h"
 #include "tests/support/service_test_options.h"
 #include "tests/support/test_rig.h"

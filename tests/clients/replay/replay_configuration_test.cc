@@ -19,7 +19,7 @@
 #include "libs/sim/manipulator_scene.h"
 #include "runtime/file_io.h"
 #include "runtime/lcm/channels.h"
-#include "runtime/lcm/message_convert.h"
+#include "runtime/lcm/shape_message.h"
 #include "tests/support/service_test_options.h"
 #include "tests/support/test_rig.h"
 
@@ -45,10 +45,10 @@ class ReplayConfigurationTest : public ::testing::Test {
     shape.configuration.enabled = true;
     shape.configuration.manipulator = "arm.yaml";
     const Vec3 base = rig_.rig().base_point;
-    shape.configuration.base_position = {base.x(), base.y(), base.z()};
-    shape.configuration.base_rotation = {std::numbers::pi / 2.0, 0.0, 0.0};
+    shape.configuration.base.base_position = {base.x(), base.y(), base.z()};
+    shape.configuration.base.base_rotation = {std::numbers::pi / 2.0, 0.0, 0.0};
     WriteFileAtomically(dir_ / "shape.yaml", OptionsToDocumentedYaml(shape));
-    world_from_base_ = shape.configuration.WorldFromBase();
+    world_from_base_ = shape.configuration.base.WorldFromBase();
     ManipulatorOptions model = ParseManipulatorYaml(
         ReadTextFile(fs::path(SHAPESENSE_SOURCE_DIR) / "config" / "manipulator.yaml"), "model");
     model.proximal_length = kRest.proximal;

@@ -9,7 +9,7 @@
 
 #include "libs/core/error.h"
 #include "libs/sim/tube_scene.h"
-#include "runtime/lcm/message_convert.h"
+#include "runtime/lcm/stage_times.h"
 #include "tests/support/test_rig.h"
 
 namespace shapesense {

@@ -8,8 +8,10 @@
 
 #include <random>
 
-#include "runtime/lcm/message_convert.h"
+#include "runtime/lcm/image_codec.h"
+#include "runtime/lcm/shape_message.h"
 #include "runtime/lcm/silhouette_message.h"
+#include "runtime/lcm/stage_times.h"
 #include "shapesense/service_status_t.hpp"
 #include "tests/support/test_rig.h"
 

@@ -7,7 +7,7 @@
 
 #include "libs/sim/scene_generators.h"
 #include "runtime/dataset.h"
-#include "runtime/lcm/message_convert.h"
+#include "runtime/lcm/image_codec.h"
 
 namespace shapesense::testing {
 namespace fs = std::filesystem;

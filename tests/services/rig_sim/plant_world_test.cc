@@ -23,7 +23,7 @@
 #include "libs/sim/scene_generators.h"
 #include "runtime/file_io.h"
 #include "runtime/lcm/channels.h"
-#include "runtime/lcm/message_convert.h"
+#include "runtime/lcm/shape_message.h"
 
 namespace shapesense {
 namespace {

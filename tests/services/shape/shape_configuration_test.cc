@@ -18,7 +18,7 @@
 #include "libs/sim/manipulator_scene.h"
 #include "runtime/file_io.h"
 #include "runtime/lcm/channels.h"
-#include "runtime/lcm/message_convert.h"
+#include "runtime/lcm/shape_message.h"
 #include "services/carving/carving_service.h"
 #include "services/shape/shape_service.h"
 #include "tests/support/service_test_options.h"
@@ -38,8 +38,8 @@ ShapeConfigurationOptions ConfigurationSection(const Rig& rig) {
   ShapeConfigurationOptions section;
   section.enabled = true;
   section.manipulator = "(in memory)";
-  section.base_position = {rig.base_point.x(), rig.base_point.y(), rig.base_point.z()};
-  section.base_rotation = {std::numbers::pi / 2.0, 0.0, 0.0};
+  section.base.base_position = {rig.base_point.x(), rig.base_point.y(), rig.base_point.z()};
+  section.base.base_rotation = {std::numbers::pi / 2.0, 0.0, 0.0};
   return section;
 }
 
@@ -56,7 +56,8 @@ class ShapeConfigurationTest : public ::testing::Test {
 
   ShapeConfigurationTest() {
     options_.configuration = ConfigurationSection(rig_->rig());
-    setup_.geometry = {kRest, options_.configuration.WorldFromBase(), options_.configuration.tapes};
+    setup_.geometry = {kRest, options_.configuration.base.WorldFromBase(),
+                       options_.configuration.tapes};
     bus_.Subscribe<shape_t>(channels::kShape, [this](const shape_t& s, const std::string&,
                                                      int64_t) { shapes_.push_back(s); });
   }
@@ -233,8 +234,8 @@ class ShapeConfigurationFilesTest : public ::testing::Test {
 TEST_F(ShapeConfigurationFilesTest, TheModelFileIsReadRelativeToTheConfig) {
   ShapeConfigurationOptions section;
   section.enabled = true;
-  section.base_position = {1.0, 2.0, 3.0};
-  section.base_rotation = {0.0, 0.0, std::numbers::pi / 2.0};
+  section.base.base_position = {1.0, 2.0, 3.0};
+  section.base.base_rotation = {0.0, 0.0, std::numbers::pi / 2.0};
   const ShapeServiceOptions options = LoadShapeServiceOptions(Write(section, ShippedModel()));
   EXPECT_EQ(fs::path(options.configuration.manipulator), dir_ / "models" / "arm.yaml");
   const std::optional<ConfigurationSetup> setup = LoadConfigurationSetup(options);

@@ -1,16 +1,15 @@
-#include "runtime/lcm/message_convert.h"
+#include "runtime/lcm/image_codec.h"
 
 #include <algorithm>
-#include <cmath>
 #include <cstring>
 #include <iterator>
-#include <numeric>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 #include <stdexcept>
+#include <vector>
 
 #include "libs/core/error.h"
-#include "libs/silhouette/silhouette.h"
+#include "runtime/lcm/stage_times.h"
 
 namespace shapesense {
 namespace {
@@ -67,21 +66,6 @@ bool HasSignature(const std::vector<uint8_t>& data, int8_t compression) {
   }
   return data.size() >= sizeof(kJpeg) &&
          std::equal(std::begin(kJpeg), std::end(kJpeg), data.begin());
-}
-
-std::string ValidateStageTimes(int32_t count, const std::vector<stage_time_t>& stages) {
-  if (count < 0 || static_cast<size_t>(count) != stages.size()) {
-    return Expected("num_stage_times", std::to_string(stages.size()) + " (the stages sent)",
-                    std::to_string(count));
-  }
-  for (const stage_time_t& stage : stages) {
-    if (stage.stage.empty()) return Expected("stage_times.stage", "a name", "an empty one");
-    if (stage.duration_us < 0) {
-      return Expected("stage_times[" + stage.stage + "].duration_us", ">= 0",
-                      std::to_string(stage.duration_us));
-    }
-  }
-  return {};
 }
 
 std::string ValidateImageGeometry(const image_t& image) {
@@ -256,57 +240,6 @@ std::string DecodeImage(const image_t& image, Convert convert) {
   return {};
 }
 
-bool AllFinite(const std::vector<double>& values) {
-  return std::all_of(values.begin(), values.end(), [](double v) { return std::isfinite(v); });
-}
-
-bool AllFinitePoints(const std::vector<std::vector<double>>& points) {
-  return std::all_of(points.begin(), points.end(),
-                     [](const std::vector<double>& p) { return p.size() == 3 && AllFinite(p); });
-}
-
-std::vector<double> ToRow(const Vec3& p) { return {p.x(), p.y(), p.z()}; }
-Vec3 FromRow(const std::vector<double>& row) { return Vec3(row[0], row[1], row[2]); }
-
-std::string ValidateVoxelGrid(const voxel_cloud_t& message) {
-  int64_t total = 1;
-  for (int axis = 0; axis < 3; ++axis) {
-    if (message.dims[axis] < 1) {
-      return Expected("dims[" + std::to_string(axis) + "]", ">= 1",
-                      std::to_string(message.dims[axis]));
-    }
-    total *= message.dims[axis];
-    if (total > INT32_MAX) return Expected("dims", "at most 2^31 - 1 voxels in all", "more");
-  }
-  if (!std::isfinite(message.voxel_size) || message.voxel_size <= 0) {
-    return Expected("voxel_size", "a positive number", std::to_string(message.voxel_size));
-  }
-  if (!std::isfinite(message.grid_origin[0]) || !std::isfinite(message.grid_origin[1]) ||
-      !std::isfinite(message.grid_origin[2])) {
-    return Expected("grid_origin", "finite coordinates", "a non-finite one");
-  }
-  return {};
-}
-
-// Indices in [0, total), each once, in any order.
-std::string ValidateVoxelIndices(const std::vector<int32_t>& voxels, int64_t total) {
-  std::vector<int32_t> sorted;
-  const bool ascending = std::is_sorted(voxels.begin(), voxels.end());
-  if (!ascending) {
-    sorted = voxels;
-    std::sort(sorted.begin(), sorted.end());
-  }
-  const std::vector<int32_t>& check = ascending ? voxels : sorted;
-  if (!check.empty() && (check.front() < 0 || check.back() >= total)) {
-    return Expected("voxels", "indices in [0, " + std::to_string(total) + ")",
-                    std::to_string(check.front() < 0 ? check.front() : check.back()));
-  }
-  if (std::adjacent_find(check.begin(), check.end()) != check.end()) {
-    return Expected("voxels", "each index once", "a repeated index");
-  }
-  return {};
-}
-
 }  // namespace
 
 int BytesPerPixel(int8_t pixel_format) {
@@ -435,158 +368,6 @@ cv::Mat MosaicBayer(const cv::Mat& bgr, int8_t bayer_format) {
     for (int x = 0; x < bgr.cols; ++x) out[x] = in[x][cell[2 * (y % 2) + x % 2]];
   }
   return mosaic;
-}
-
-voxel_cloud_t VoxelCloudToMessage(const VoxelCloud& cloud) {
-  voxel_cloud_t message{};
-  for (int axis = 0; axis < 3; ++axis) {
-    message.grid_origin[axis] = cloud.grid.origin[axis];
-    message.dims[axis] = cloud.grid.dims[static_cast<size_t>(axis)];
-  }
-  message.voxel_size = cloud.grid.voxel_size;
-  message.num_voxels = static_cast<int32_t>(cloud.voxels.size());
-  message.voxels = cloud.voxels;
-  message.labels.resize(cloud.voxels.size(), 0);
-  for (size_t i = 0; i < cloud.labels.size() && i < cloud.voxels.size(); ++i) {
-    message.labels[i] = cloud.labels[i] == kLabelMarker ? 1 : 0;
-  }
-  return message;
-}
-
-std::string ValidateVoxelCloudMessage(const voxel_cloud_t& message) {
-  if (std::string error = ValidateVoxelGrid(message); !error.empty()) return error;
-  if (message.num_voxels < 0 || static_cast<size_t>(message.num_voxels) != message.voxels.size() ||
-      message.labels.size() != message.voxels.size()) {
-    return Expected("num_voxels",
-                    std::to_string(message.voxels.size()) + " voxels and as many labels",
-                    std::to_string(message.num_voxels) + " and " +
-                        std::to_string(message.labels.size()) + " labels");
-  }
-  const int64_t total = int64_t{message.dims[0]} * message.dims[1] * message.dims[2];
-  if (std::string error = ValidateVoxelIndices(message.voxels, total); !error.empty()) return error;
-  return ValidateStageTimes(message.num_stage_times, message.stage_times);
-}
-
-std::string VoxelCloudFromMessage(const voxel_cloud_t& message, VoxelCloud* cloud) {
-  if (std::string error = ValidateVoxelCloudMessage(message); !error.empty()) return error;
-  cloud->grid.origin = Vec3(message.grid_origin[0], message.grid_origin[1], message.grid_origin[2]);
-  cloud->grid.voxel_size = message.voxel_size;
-  cloud->grid.dims = {message.dims[0], message.dims[1], message.dims[2]};
-  std::vector<size_t> order(message.voxels.size());
-  std::iota(order.begin(), order.end(), size_t{0});
-  if (!std::is_sorted(message.voxels.begin(), message.voxels.end())) {
-    std::sort(order.begin(), order.end(),
-              [&](size_t a, size_t b) { return message.voxels[a] < message.voxels[b]; });
-  }
-  cloud->voxels.resize(order.size());
-  cloud->labels.resize(order.size());
-  for (size_t i = 0; i < order.size(); ++i) {
-    cloud->voxels[i] = message.voxels[order[i]];
-    cloud->labels[i] = message.labels[order[i]] > 0 ? kLabelMarker : kLabelBody;
-  }
-  return {};
-}
-
-shape_t ShapeToMessage(const ShapeEstimate& shape) {
-  shape_t message{};
-  message.valid = shape.valid;
-  message.error = shape.error;
-  for (const Vec3& p : shape.centerline) message.centerline.push_back(ToRow(p));
-  message.num_points = static_cast<int32_t>(message.centerline.size());
-  message.arc_length = shape.arc_length;
-  message.curvature = shape.curvature;
-  message.arc_length.resize(message.centerline.size(), 0.0);
-  message.curvature.resize(message.centerline.size(), 0.0);
-  for (const Vec3& p : shape.markers) message.markers.push_back(ToRow(p));
-  message.num_markers = static_cast<int32_t>(message.markers.size());
-  message.marker_arc_length = shape.marker_arc_length;
-  message.marker_arc_length.resize(message.markers.size(), 0.0);
-  for (int axis = 0; axis < 3; ++axis) message.tip[axis] = shape.tip[axis];
-  message.length = shape.length;
-  message.centerline_residual_mm = shape.silhouette_residual_mm;
-  return message;
-}
-
-std::string ValidateShapeMessage(const shape_t& message) {
-  const size_t points = message.centerline.size();
-  if (message.num_points < 0 || static_cast<size_t>(message.num_points) != points ||
-      message.arc_length.size() != points || message.curvature.size() != points) {
-    return Expected("num_points", "as many centreline points, arc lengths and curvatures",
-                    std::to_string(message.num_points));
-  }
-  const size_t markers = message.markers.size();
-  if (message.num_markers < 0 || static_cast<size_t>(message.num_markers) != markers ||
-      message.marker_arc_length.size() != markers) {
-    return Expected("num_markers", "as many markers and marker arc lengths",
-                    std::to_string(message.num_markers));
-  }
-  if (!AllFinitePoints(message.centerline) || !AllFinitePoints(message.markers) ||
-      !AllFinite(message.arc_length) || !AllFinite(message.curvature) ||
-      !AllFinite(message.marker_arc_length) || !std::isfinite(message.length)) {
-    return Expected("centerline, markers, arc lengths, curvature, length", "finite numbers",
-                    "others");
-  }
-  if (message.valid && points < 2)
-    return Expected("num_points", ">= 2 for a valid shape", std::to_string(points));
-  if (message.has_configuration && (!std::all_of(std::begin(message.q), std::end(message.q),
-                                                 [](double v) { return std::isfinite(v); }) ||
-                                    !std::isfinite(message.configuration_residual_mm))) {
-    return Expected("q, configuration_residual_mm", "finite numbers", "others");
-  }
-  return ValidateStageTimes(message.num_stage_times, message.stage_times);
-}
-
-std::string ShapeFromMessage(const shape_t& message, ShapeEstimate* shape) {
-  if (std::string error = ValidateShapeMessage(message); !error.empty()) return error;
-  *shape = ShapeEstimate{};
-  shape->valid = message.valid;
-  shape->error = message.error;
-  for (const auto& row : message.centerline) shape->centerline.push_back(FromRow(row));
-  shape->arc_length = message.arc_length;
-  shape->curvature = message.curvature;
-  for (const auto& row : message.markers) shape->markers.push_back(FromRow(row));
-  shape->marker_arc_length = message.marker_arc_length;
-  shape->tip = Vec3(message.tip[0], message.tip[1], message.tip[2]);
-  shape->length = message.length;
-  shape->silhouette_residual_mm = message.centerline_residual_mm;
-  return {};
-}
-
-void SetMessageConfiguration(const Configuration& q, double residual_mm, shape_t* message) {
-  message->has_configuration = true;
-  for (int i = 0; i < 4; ++i) message->q[i] = q(i);
-  message->configuration_residual_mm = residual_mm;
-}
-
-std::optional<Configuration> MessageConfiguration(const shape_t& message) {
-  if (!message.has_configuration) return std::nullopt;
-  return Configuration(message.q[0], message.q[1], message.q[2], message.q[3]);
-}
-
-stage_time_t MakeStageTime(const std::string& stage, int64_t duration_us, int64_t end_utime) {
-  stage_time_t time{};
-  time.stage = stage;
-  time.duration_us = duration_us;
-  time.end_utime = end_utime;
-  return time;
-}
-
-const stage_time_t* FindStageTime(const std::vector<stage_time_t>& stages,
-                                  const std::string& stage) {
-  for (const stage_time_t& time : stages) {
-    if (time.stage == stage) return &time;
-  }
-  return nullptr;
-}
-
-void MergeStageTime(const stage_time_t& stage, std::vector<stage_time_t>* stages) {
-  for (stage_time_t& time : *stages) {
-    if (time.stage != stage.stage) continue;
-    time.duration_us = std::max(time.duration_us, stage.duration_us);
-    time.end_utime = std::max(time.end_utime, stage.end_utime);
-    return;
-  }
-  stages->push_back(stage);
 }
 
 }  // namespace shapesense
