@@ -292,13 +292,13 @@ std::string ValidateImageMessage(const image_t& image) {
 std::string ImageMessageToBgr(const image_t& image, cv::Mat* bgr, ImageCopy copy) {
   ReleaseIfView(bgr);
   return DecodeImage(image, [&](const cv::Mat& pixels) {
-    const bool raw_bgr =
-        image.pixel_format == image_t::PIXEL_BGR8 && image.compression == image_t::COMPRESSION_NONE;
-    if (raw_bgr && copy == ImageCopy::kViewWhenPossible) {
+    // A view of the message's bytes when allowed; a decoded image is a
+    // fresh buffer already.
+    const bool compressed = image.compression != image_t::COMPRESSION_NONE;
+    const bool as_is = image.pixel_format == image_t::PIXEL_BGR8 &&
+                       (compressed || copy == ImageCopy::kViewWhenPossible);
+    if (as_is) {
       *bgr = pixels;
-    } else if (image.compression != image_t::COMPRESSION_NONE &&
-               image.pixel_format == image_t::PIXEL_BGR8) {
-      *bgr = pixels;  // freshly decoded: already a copy
     } else {
       ConvertToBgr(pixels, image.pixel_format, bgr);
     }

@@ -53,7 +53,7 @@ bool WithinLimits(const Configuration& q, const SectionLengths& rest,
 
 // "" or why the options and the model do not fit each other.
 std::string Misfit(const ManipulatorOptions& model, const PlantWorldOptions& options) {
-  if (const std::string error = options.Validate(); !error.empty()) return error;
+  if (std::string error = options.Validate(); !error.empty()) return error;
   const size_t tendons = model.tendons.size();
   if (!options.initial_displacements.empty() && options.initial_displacements.size() != tendons) {
     return "initial_displacements: expected " + std::to_string(tendons) +
@@ -156,7 +156,7 @@ PlantWorld::PlantWorld(const ManipulatorOptions& nominal, const PlantWorldOption
 }
 
 std::string PlantWorld::OnCommand(const tendon_command_t& command, int64_t utime) {
-  const std::string why = CommandError(command, num_tendons_);
+  std::string why = CommandError(command, num_tendons_);
   std::lock_guard lock(mutex_);
   if (!why.empty()) {
     ++counters_.rejected;
@@ -224,10 +224,10 @@ Configuration PlantWorld::ConfigurationAtUtime(int64_t utime) {
     AdvanceLocked(utime);
     return plant_.configuration();
   }
-  for (auto sample = history_.rbegin(); sample != history_.rend(); ++sample) {
-    if (sample->utime <= utime) return sample->q;
-  }
-  return history_.front().q;  // older than the history: the oldest kept
+  const auto sample = std::find_if(history_.rbegin(), history_.rend(),
+                                   [&](const auto& kept) { return kept.utime <= utime; });
+  // Older than the history: the oldest kept.
+  return sample != history_.rend() ? sample->q : history_.front().q;
 }
 
 TubeScene PlantWorld::SceneAtUtime(int64_t utime) {

@@ -55,7 +55,7 @@ std::string ShapeConfigurationOptions::Validate() const {
     return "manipulator: expected the manipulator model file (configuration is enabled), got "
            "nothing";
   }
-  if (const std::string error = base.Validate(); !error.empty()) return error;
+  if (std::string error = base.Validate(); !error.empty()) return error;
   if (const std::string error = tapes.Validate(); !error.empty()) return "tapes." + error;
   if (const std::string error = sensing.Validate(); !error.empty()) return "sensing." + error;
   return {};
