@@ -10,7 +10,7 @@
 // SHAPESENSE_TARGET at their times, records the plant's true q from the
 // rig's truth, audits every command that went out against the safety
 // limits (LimitAudit) and scores each target's steady-state tip error
-// (closed_loop_score.h).
+// (libs/evaluation/closed_loop_score.h).
 //
 //   rig-sim --plant ─► capture ─► carving ─► shape (q) ─► controller ─► rig-sim
 //        └─ truth (true q) ─────────────────────────────► this process ◄─ commands
@@ -26,11 +26,11 @@
 #include <string>
 #include <vector>
 
-#include "clients/tools/demo/closed_loop_score.h"
 #include "clients/tools/demo/demo_processes.h"
 #include "clients/tools/demo/demo_scorer.h"
 #include "clients/tools/demo/live_demo.h"
 #include "libs/control/limit_audit.h"
+#include "libs/evaluation/closed_loop_score.h"
 
 namespace shapesense {
 
@@ -90,6 +90,12 @@ std::filesystem::path FindConfigDir();
 // says so too), InputError on bad arguments or config files.
 ExperimentReport RunClosedLoopExperiment(const ExperimentArgs& args, const std::atomic<bool>& stop,
                                          std::ostream& log);
+
+// One run's scores in report.json: {mode, mean_tip_error_mm,
+//  max_tip_error_mm, mean_tip_error_percent, targets_scored,
+//  targets_within_1mm, targets: [{index, target_q, target_tip_mm, mean_tip_mm,
+//  tip_error_mm, max_tip_error_mm, distal_tip_error_mm, samples}]}
+nlohmann::json RunScoreToJson(const RunScore& run);
 
 // report.json: open_loop_tip_error_mm, closed_loop_tip_error_mm (means over
 // the targets at steady state), limit_violations, and every run's scores.

@@ -1,4 +1,4 @@
-#include "clients/tools/demo/closed_loop_plot.h"
+#include "libs/evaluation/closed_loop_plot.h"
 
 #include <algorithm>
 #include <cmath>

@@ -4,11 +4,12 @@
 // driven through a list of held target configurations once per controller
 // mode, and each target is scored by how far the plant's TRUE tip sits from
 // the target's tip over the last part of its hold (the steady state), in the
-// manipulator's base frame. Pure computation: the runner collects the truth
-// stream and writes the table, the JSON and the picture (closed_loop_plot.h).
+// manipulator's base frame. Pure computation, no I/O: the runner (`shapesense
+// demo`, clients/tools/demo/closed_loop_experiment.h) collects the truth
+// stream and writes the table, the JSON (its RunScoreToJson) and the picture
+// (closed_loop_plot.h).
 
 #include <cstdint>
-#include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
 
@@ -73,12 +74,6 @@ std::vector<Vec3> TipPath(const std::vector<ConfigurationSample>& truth,
 // worst error in mm, the mean in % of L1, how many targets are within 1 mm.
 std::string FormatExperimentTable(const std::vector<ExperimentTarget>& targets,
                                   const std::vector<RunScore>& runs, const SectionLengths& rest);
-
-// {mode, mean_tip_error_mm, max_tip_error_mm, mean_tip_error_percent,
-//  targets_scored, targets_within_1mm, targets: [{index, target_q,
-//  target_tip_mm, mean_tip_mm, tip_error_mm, max_tip_error_mm,
-//  distal_tip_error_mm, samples}]}
-nlohmann::json RunScoreToJson(const RunScore& run);
 
 // The experiment's targets, shared by the demo and its end-to-end test.
 struct ExperimentTargetOptions {

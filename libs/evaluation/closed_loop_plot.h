@@ -8,7 +8,7 @@
 #include <string>
 #include <vector>
 
-#include "clients/tools/demo/closed_loop_score.h"
+#include "libs/evaluation/closed_loop_score.h"
 
 namespace shapesense {
 

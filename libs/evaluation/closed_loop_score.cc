@@ -1,4 +1,4 @@
-#include "clients/tools/demo/closed_loop_score.h"
+#include "libs/evaluation/closed_loop_score.h"
 
 #include <algorithm>
 #include <cmath>
@@ -236,30 +236,6 @@ std::string FormatExperimentTable(const std::vector<ExperimentTarget>& targets,
   table += "\n";
   for (const RunScore& run : runs) table += SummaryLine(run, rest);
   return table;
-}
-
-nlohmann::json RunScoreToJson(const RunScore& run) {
-  const auto array = [](const auto& v) {
-    return std::vector<double>(v.data(), v.data() + v.size());
-  };
-  nlohmann::json targets = nlohmann::json::array();
-  for (const TargetScore& t : run.targets) {
-    targets.push_back({{"index", t.index},
-                       {"target_q", array(t.target_q)},
-                       {"target_tip_mm", array(t.target_tip)},
-                       {"mean_tip_mm", array(t.mean_tip)},
-                       {"tip_error_mm", t.tip_error_mm},
-                       {"max_tip_error_mm", t.max_tip_error_mm},
-                       {"distal_tip_error_mm", t.distal_tip_error_mm},
-                       {"samples", t.samples}});
-  }
-  return {{"mode", run.mode},
-          {"mean_tip_error_mm", run.mean_tip_error_mm},
-          {"max_tip_error_mm", run.max_tip_error_mm},
-          {"mean_tip_error_percent", run.mean_tip_error_percent},
-          {"targets_scored", run.targets_scored},
-          {"targets_within_1mm", run.targets_within(1.0)},
-          {"targets", targets}};
 }
 
 std::string ExperimentTargetOptions::Validate() const {
