@@ -103,18 +103,16 @@ void CarvingService::OnImage(image_t&& image, const std::string& channel,
     status_.Note(channel + ": image names camera '" + image.camera + "'");
     return;
   }
-  std::optional<PreparedView> view = PrepareOnArrival(image);
+  std::optional<ArrivedView> arrived = PrepareOnArrival(image);
   // Kept for the note on a rejection (the image moves into the assembler).
   const std::string camera = image.camera;
   const int64_t trigger_seq = image.trigger_seq;
-  const int camera_index = RigIndex(image.camera);
-  const ImageIdentity identity = IdentityOf(static_cast<size_t>(camera_index), image);
   const int64_t dropped_before = assembler_.counters().DroppedSets();
   AssemblyResult result = assembler_.Add(std::move(image), receive_utime);
   CountAssemblyDrops(dropped_before);
   const bool accepted =
       result.outcome == AssemblyOutcome::kPending || result.outcome == AssemblyOutcome::kCompleted;
-  if (accepted && view) prepared_.Keep(identity, std::move(*view));
+  if (accepted && arrived) prepared_.Keep(arrived->image, std::move(arrived->view));
   if (result.outcome == AssemblyOutcome::kCompleted) {
     CarvingJob job{std::move(*result.completed), {}};
     job.views = prepared_.Take(job.set);
@@ -134,14 +132,14 @@ int CarvingService::RigIndex(const std::string& camera) const {
   return -1;
 }
 
-std::optional<PreparedView> CarvingService::PrepareOnArrival(const image_t& image) {
+std::optional<CarvingService::ArrivedView> CarvingService::PrepareOnArrival(const image_t& image) {
   const int camera = RigIndex(image.camera);
   if (camera < 0) return std::nullopt;  // the assembler refuses it
-  PreparedView view = view_pool_.Take();
-  if (!stage_.PrepareView(static_cast<size_t>(camera), image, &view, &compact_scratch_).empty()) {
+  ArrivedView arrived{IdentityOf(static_cast<size_t>(camera), image), view_pool_.Take()};
+  if (!stage_.PrepareView(arrived.image.camera, image, &arrived.view, &compact_scratch_).empty()) {
     return std::nullopt;
   }
-  return view;
+  return arrived;
 }
 
 void CarvingService::CountAssemblyDrops(int64_t before) {

@@ -102,9 +102,14 @@ class CarvingService {
                int64_t receive_utime);
   // The camera's index in the rig, or -1.
   int RigIndex(const std::string& camera) const;
-  // The view of an image about to be assembled, or nullopt when it does not
-  // decode (its set, if it completes, reports the error when carved).
-  std::optional<PreparedView> PrepareOnArrival(const image_t& image);
+  struct ArrivedView {
+    ImageIdentity image;
+    PreparedView view;
+  };
+  // The view of an image about to be assembled, or nullopt when its camera
+  // is not the rig's or it does not decode (its set, if it completes,
+  // reports the error when carved).
+  std::optional<ArrivedView> PrepareOnArrival(const image_t& image);
   void CountAssemblyDrops(int64_t before);
   void CarveAndPublish(CarvingJob& job);
   void MaybePublishSilhouettes(const FrameSet& set);

@@ -2,9 +2,9 @@
 // for every pixel format and compression, and malformed messages (wrong
 // sizes, formats, strides, truncated or garbage data) rejected with a reason.
 #include "runtime/lcm/image_codec.h"
-#include "runtime/lcm/voxel_cloud_message.h"
 #include "runtime/lcm/shape_message.h"
 #include "runtime/lcm/stage_times.h"
+#include "runtime/lcm/voxel_cloud_message.h"
 
 #include <gtest/gtest.h>
 
