@@ -57,7 +57,7 @@ bool CompressionAllowed(int8_t format, int8_t compression) {
   return compression == image_t::COMPRESSION_PNG || !IsBayer(format);
 }
 
-bool HasSignature(const std::vector<uint8_t>& data, int8_t compression) {
+bool HasSignature(std::span<const uint8_t> data, int8_t compression) {
   static constexpr uint8_t kPng[] = {0x89, 'P', 'N', 'G', 0x0D, 0x0A, 0x1A, 0x0A};
   static constexpr uint8_t kJpeg[] = {0xFF, 0xD8, 0xFF};
   if (compression == image_t::COMPRESSION_PNG) {
@@ -68,7 +68,7 @@ bool HasSignature(const std::vector<uint8_t>& data, int8_t compression) {
          std::equal(std::begin(kJpeg), std::end(kJpeg), data.begin());
 }
 
-std::string ValidateImageGeometry(const image_t& image) {
+std::string ValidateImageGeometry(const image_t& image, std::span<const uint8_t> bytes) {
   for (const auto& [key, value] : {std::pair{"width", image.width}, {"height", image.height}}) {
     if (value < 1 || value > kMaxImageSide) {
       return Expected(key, "1-" + std::to_string(kMaxImageSide) + " px", std::to_string(value));
@@ -78,8 +78,8 @@ std::string ValidateImageGeometry(const image_t& image) {
     return Expected("pixel_format", "one of the PIXEL_* constants",
                     std::to_string(image.pixel_format));
   }
-  if (image.size < 0 || static_cast<size_t>(image.size) != image.data.size()) {
-    return Expected("size", std::to_string(image.data.size()) + " (the bytes sent)",
+  if (image.size < 0 || static_cast<size_t>(image.size) != bytes.size()) {
+    return Expected("size", std::to_string(bytes.size()) + " (the bytes sent)",
                     std::to_string(image.size));
   }
   return {};
@@ -102,7 +102,7 @@ std::string ValidateRawLayout(const image_t& image) {
   return {};
 }
 
-std::string ValidateCompressedLayout(const image_t& image) {
+std::string ValidateCompressedLayout(const image_t& image, std::span<const uint8_t> bytes) {
   if (!CompressionAllowed(image.pixel_format, image.compression)) {
     return Expected("compression", "none for " + PixelFormatName(image.pixel_format),
                     image.compression == image_t::COMPRESSION_PNG ? "PNG" : "JPEG");
@@ -110,7 +110,7 @@ std::string ValidateCompressedLayout(const image_t& image) {
   if (image.row_stride != 0) {
     return Expected("row_stride", "0 for a compressed image", std::to_string(image.row_stride));
   }
-  if (!HasSignature(image.data, image.compression)) {
+  if (!HasSignature(bytes, image.compression)) {
     return Expected(
         "data", image.compression == image_t::COMPRESSION_PNG ? "a PNG stream" : "a JPEG stream",
         "other bytes");
@@ -128,16 +128,17 @@ std::string ValidateImageTimes(const image_t& image) {
   return ValidateStageTimes(image.num_stage_times, image.stage_times);
 }
 
-std::string ValidateImageFields(const image_t& image) {
-  if (std::string error = ValidateImageGeometry(image); !error.empty()) return error;
+std::string ValidateImageFields(const image_t& image, std::span<const uint8_t> bytes) {
+  if (std::string error = ValidateImageGeometry(image, bytes); !error.empty()) return error;
   const int8_t compression = image.compression;
   if (compression != image_t::COMPRESSION_NONE && compression != image_t::COMPRESSION_PNG &&
       compression != image_t::COMPRESSION_JPEG) {
     return Expected("compression", "one of the COMPRESSION_* constants",
                     std::to_string(compression));
   }
-  std::string error = compression == image_t::COMPRESSION_NONE ? ValidateRawLayout(image)
-                                                               : ValidateCompressedLayout(image);
+  std::string error = compression == image_t::COMPRESSION_NONE
+                          ? ValidateRawLayout(image)
+                          : ValidateCompressedLayout(image, bytes);
   return error.empty() ? ValidateImageTimes(image) : error;
 }
 
@@ -146,16 +147,18 @@ std::string CameraPrefix(const image_t& image) {
 }
 
 // The pixels in the layout of pixel_format: a view of raw bytes, or decoded.
-std::string PixelsOf(const image_t& image, cv::Mat* pixels) {
+std::string PixelsOf(const image_t& image, std::span<const uint8_t> bytes, cv::Mat* pixels) {
   const int type = CvTypeOf(image.pixel_format);
   if (image.compression == image_t::COMPRESSION_NONE) {
     // A read-only view: cv::Mat has no const form.
-    *pixels = cv::Mat(image.height, image.width, type, const_cast<uint8_t*>(image.data.data()),
+    *pixels = cv::Mat(image.height, image.width, type, const_cast<uint8_t*>(bytes.data()),
                       static_cast<size_t>(image.row_stride));
     return {};
   }
   try {
-    *pixels = cv::imdecode(image.data, cv::IMREAD_UNCHANGED);
+    const cv::Mat stream(1, static_cast<int>(bytes.size()), CV_8UC1,
+                         const_cast<uint8_t*>(bytes.data()));
+    *pixels = cv::imdecode(stream, cv::IMREAD_UNCHANGED);
   } catch (const cv::Exception& e) {
     return Expected("data", "a decodable image", std::string("an error (") + e.what() + ")");
   }
@@ -220,10 +223,10 @@ void ReleaseIfView(cv::Mat* out) {
 
 // The one shared path of ImageMessageToBgr and ImageMessageToMono.
 template <class Convert>
-std::string DecodeImage(const image_t& image, Convert convert) {
-  if (std::string error = ValidateImageMessage(image); !error.empty()) return error;
+std::string DecodeImage(const image_t& image, std::span<const uint8_t> bytes, Convert convert) {
+  if (std::string error = ValidateImageMessage(image, bytes); !error.empty()) return error;
   cv::Mat pixels;
-  if (std::string error = PixelsOf(image, &pixels); !error.empty())
+  if (std::string error = PixelsOf(image, bytes, &pixels); !error.empty())
     return CameraPrefix(image) + error;
   // A demosaic needs 2×2 cells, YUYV pairs of pixels; OpenCV asserts otherwise.
   if ((IsBayer(image.pixel_format) && (image.width < 2 || image.height < 2)) ||
@@ -284,14 +287,23 @@ std::string PixelFormatName(int8_t pixel_format) {
 }
 
 std::string ValidateImageMessage(const image_t& image) {
+  return ValidateImageMessage(image, image.data);
+}
+
+std::string ValidateImageMessage(const image_t& image, std::span<const uint8_t> bytes) {
   if (image.camera.empty()) return "(unnamed camera): camera: expected a name, got none";
-  const std::string error = ValidateImageFields(image);
+  const std::string error = ValidateImageFields(image, bytes);
   return error.empty() ? error : CameraPrefix(image) + error;
 }
 
 std::string ImageMessageToBgr(const image_t& image, cv::Mat* bgr, ImageCopy copy) {
+  return ImageMessageToBgr(image, image.data, bgr, copy);
+}
+
+std::string ImageMessageToBgr(const image_t& image, std::span<const uint8_t> bytes, cv::Mat* bgr,
+                              ImageCopy copy) {
   ReleaseIfView(bgr);
-  return DecodeImage(image, [&](const cv::Mat& pixels) {
+  return DecodeImage(image, bytes, [&](const cv::Mat& pixels) {
     // A view of the message's bytes when allowed; a decoded image is a
     // fresh buffer already.
     const bool compressed = image.compression != image_t::COMPRESSION_NONE;
@@ -306,8 +318,9 @@ std::string ImageMessageToBgr(const image_t& image, cv::Mat* bgr, ImageCopy copy
 }
 
 std::string ImageMessageToMono(const image_t& image, cv::Mat* mono) {
-  return DecodeImage(
-      image, [&](const cv::Mat& pixels) { ConvertToMono(pixels, image.pixel_format, mono); });
+  return DecodeImage(image, image.data, [&](const cv::Mat& pixels) {
+    ConvertToMono(pixels, image.pixel_format, mono);
+  });
 }
 
 image_t ImageToMessage(const cv::Mat& pixels, int8_t pixel_format, int8_t compression,

@@ -7,6 +7,7 @@
 // here from the libraries' types are always valid.
 #include <cstdint>
 #include <opencv2/core.hpp>
+#include <span>
 #include <string>
 
 #include "shapesense/image_t.hpp"
@@ -32,6 +33,9 @@ std::string PixelFormatName(int8_t pixel_format);
 // callback): camera name, size, format, compression and its signature,
 // stride, byte count, times, stage times. "" when usable, else the reason.
 std::string ValidateImageMessage(const image_t& image);
+// The same for an image whose bytes lie elsewhere (DecodeImageFields):
+// `bytes` stands for image.data.
+std::string ValidateImageMessage(const image_t& image, std::span<const uint8_t> bytes);
 
 // Decodes to 8-bit BGR: BGR8 as is, RGB8 swapped, MONO8 replicated, Bayer
 // demosaiced (bilinear), YUYV converted, PNG/JPEG decoded first. "" on
@@ -46,6 +50,10 @@ enum class ImageCopy {
 // `bgr` keeps its buffer when it owns one of the right size; a view (of an
 // earlier message) is never written into.
 std::string ImageMessageToBgr(const image_t& image, cv::Mat* bgr,
+                              ImageCopy copy = ImageCopy::kAlways);
+// The same with the image's bytes elsewhere: with kViewWhenPossible, `bgr`
+// may view `bytes`.
+std::string ImageMessageToBgr(const image_t& image, std::span<const uint8_t> bytes, cv::Mat* bgr,
                               ImageCopy copy = ImageCopy::kAlways);
 // Decodes to 8-bit grey (colour images converted, MONO8 as is).
 std::string ImageMessageToMono(const image_t& image, cv::Mat* mono);

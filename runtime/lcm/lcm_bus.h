@@ -5,6 +5,7 @@
 #include <functional>
 #include <lcm/lcm-cpp.hpp>
 #include <memory>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -38,6 +39,18 @@ class LcmBus {
     // A plain function, not a member pointer: GCC 12's UBSan misreads LCM's
     // member-pointer subscription path (a false "misaligned address").
     lcm_.subscribeFunction(channel, &Typed<Message>::OnRawStatic, subscription.get());
+    subscriptions_.push_back(std::move(subscription));
+  }
+
+  // Handler gets the raw bytes (valid during the call only), the channel and
+  // the receive time, decodes them itself, and returns "" or why they are
+  // not a valid message (counted as a rejection, as a typed subscription's
+  // malformed message). For large messages read once: nothing is copied.
+  using RawHandler =
+      std::function<std::string(std::span<const uint8_t>, const std::string&, int64_t)>;
+  void SubscribeRaw(const std::string& channel, RawHandler handler) {
+    auto subscription = std::make_unique<Raw>(this, std::move(handler));
+    lcm_.subscribeFunction(channel, &Raw::OnRawStatic, subscription.get());
     subscriptions_.push_back(std::move(subscription));
   }
 
@@ -85,6 +98,25 @@ class LcmBus {
 
     LcmBus* bus_;
     std::function<void(Message&&, const std::string&, int64_t)> handler_;
+  };
+
+  struct Raw : SubscriptionBase {
+    Raw(LcmBus* bus, RawHandler handler) : bus_(bus), handler_(std::move(handler)) {}
+
+    static void OnRawStatic(const lcm::ReceiveBuffer* buffer, const std::string& channel,
+                            Raw* self) {
+      const std::span<const uint8_t> bytes(static_cast<const uint8_t*>(buffer->data),
+                                           buffer->data_size);
+      try {
+        const std::string why = self->handler_(bytes, channel, buffer->recv_utime);
+        if (!why.empty()) self->bus_->Reject(channel, why);
+      } catch (...) {
+        ++self->bus_->handler_errors_;
+      }
+    }
+
+    LcmBus* bus_;
+    RawHandler handler_;
   };
 
   void Reject(const std::string& channel, const std::string& why);

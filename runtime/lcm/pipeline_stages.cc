@@ -80,12 +80,17 @@ std::vector<std::string> CameraNames(const Rig& rig) {
 }
 
 std::string DecodeImage(const image_t& image, const Camera& camera, cv::Mat* bgr) {
+  return DecodeImage(image, image.data, camera, bgr);
+}
+
+std::string DecodeImage(const image_t& image, std::span<const uint8_t> bytes, const Camera& camera,
+                        cv::Mat* bgr) {
   if (image.width != camera.width || image.height != camera.height) {
     return camera.name + ": expected " + std::to_string(camera.width) + "x" +
            std::to_string(camera.height) + " (the rig's), got " + std::to_string(image.width) +
            "x" + std::to_string(image.height);
   }
-  return ImageMessageToBgr(image, bgr, ImageCopy::kViewWhenPossible);
+  return ImageMessageToBgr(image, bytes, bgr, ImageCopy::kViewWhenPossible);
 }
 
 std::vector<stage_time_t> FrameSetStageTimes(const FrameSet& set) {
@@ -112,11 +117,22 @@ CarvingStage::CarvingStage(const Rig& rig, std::vector<cv::Mat> backgrounds,
 
 std::string CarvingStage::PrepareView(size_t camera, const image_t& image, PreparedView* view,
                                       CompactScratch* scratch) const {
+  return PrepareView(camera, image, image.data, view, scratch);
+}
+
+std::string CarvingStage::PrepareView(size_t camera, const image_t& image,
+                                      std::span<const uint8_t> bytes, PreparedView* view,
+                                      CompactScratch* scratch) const {
   view->start_utime = NowUtime();
   view->end_utime = 0;
-  if (camera >= rig_.cameras.size()) return "no camera " + std::to_string(camera) + " in the rig";
+  view->error.clear();
+  if (camera >= rig_.cameras.size()) {
+    view->error = "no camera " + std::to_string(camera) + " in the rig";
+    return view->error;
+  }
   cv::Mat bgr;
-  if (std::string error = DecodeImage(image, rig_.cameras[camera], &bgr); !error.empty()) {
+  if (std::string error = DecodeImage(image, bytes, rig_.cameras[camera], &bgr); !error.empty()) {
+    view->error = error;
     return error;
   }
   extractor_.Extract(bgr, backgrounds_[camera], &view->silhouette);
@@ -133,7 +149,11 @@ std::string CarvingStage::Carve(const FrameSet& set, std::vector<PreparedView>* 
   }
   for (size_t k = 0; k < n; ++k) {
     PreparedView& view = (*views)[k];
+    if (!view.error.empty()) return view.error;
     if (view.end_utime > 0) continue;
+    if (set.images[k].data.empty()) {
+      return set.images[k].camera + ": its silhouette was not kept, and its image holds no bytes";
+    }
     if (std::string error = PrepareView(k, set.images[k], &view, &out->compact_scratch);
         !error.empty()) {
       return error;
@@ -166,7 +186,10 @@ std::string CarvingStage::Carve(const FrameSet& set, std::vector<PreparedView>* 
 
 std::string CarvingStage::Process(const FrameSet& set, CarvingOutput* out) const {
   out->views.resize(set.images.size());
-  for (PreparedView& view : out->views) view.end_utime = 0;
+  for (PreparedView& view : out->views) {
+    view.end_utime = 0;
+    view.error.clear();
+  }
   return Carve(set, &out->views, out);
 }
 

@@ -8,6 +8,7 @@
 #include <filesystem>
 #include <opencv2/core.hpp>
 #include <optional>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -43,6 +44,9 @@ std::vector<std::string> CameraNames(const Rig& rig);
 // Decodes an image of `camera` to 8-bit BGR of the camera's size (a raw BGR8
 // image becomes a view of the message's bytes). "" or the reason.
 std::string DecodeImage(const image_t& image, const Camera& camera, cv::Mat* bgr);
+// The same with the image's bytes elsewhere (DecodeImageFields).
+std::string DecodeImage(const image_t& image, std::span<const uint8_t> bytes, const Camera& camera,
+                        cv::Mat* bgr);
 
 // The stage times a frame-set brings: those of its images merged by name
 // (a stage of the set lasted as long as its slowest image), plus
@@ -58,7 +62,10 @@ struct PreparedView {
   Silhouette silhouette;
   CompactSilhouette compact;
   int64_t start_utime = 0;  // decoding began
-  int64_t end_utime = 0;    // compaction ended
+  int64_t end_utime = 0;    // compaction ended; 0: not prepared (yet)
+  // Why the image could not be prepared ("" when it was, or was not tried):
+  // its set then fails to carve with this reason.
+  std::string error;
 };
 
 // What CarvingStage produces; kept between frame-sets so buffers are reused.
@@ -92,9 +99,15 @@ class CarvingStage {
   // caller's.
   std::string PrepareView(size_t camera, const image_t& image, PreparedView* view,
                           CompactScratch* scratch) const;
+  // The same with the image's bytes elsewhere (DecodeImageFields): the
+  // carving service prepares each image inside its LCM callback, from the
+  // received buffer itself. `view->error` keeps the reason too.
+  std::string PrepareView(size_t camera, const image_t& image, std::span<const uint8_t> bytes,
+                          PreparedView* view, CompactScratch* scratch) const;
 
   // Carves `set` from its images' views: (*views)[k] prepared from
-  // set.images[k], or empty (`end_utime` 0) to be prepared here. The views
+  // set.images[k], or empty (`end_utime` 0) to be prepared here when that
+  // image still holds its bytes (else the set fails: its view was lost). The views
   // are swapped into `out`, and come back holding its earlier buffers. ""
   // on success, else why the set could not be carved; `out->message` is then
   // stale.

@@ -1,5 +1,8 @@
 #include "runtime/lcm/wire_check.h"
 
+#include <algorithm>
+#include <vector>
+
 namespace shapesense {
 namespace {
 
@@ -62,6 +65,7 @@ class WireWalker {
     return Count(&count) && SkipArray(count, kRunBytes);
   }
   bool AtEnd() const { return pos_ == size_; }
+  size_t position() const { return pos_; }
 
  private:
   const uint8_t* data_;
@@ -83,6 +87,32 @@ bool WireCheck<image_t>::Plausible(const uint8_t* data, size_t size) {
   int64_t bytes = 0;
   return walk.Skip(kHash + kHeader) && walk.SkipString() && walk.Skip(kImageFixed) &&
          walk.StageTimes() && walk.Count(&bytes) && walk.SkipArray(bytes, 1) && walk.AtEnd();
+}
+
+std::string DecodeImageFields(const void* data, size_t size, image_t* fields,
+                              std::span<const uint8_t>* pixels) {
+  const auto* bytes = static_cast<const uint8_t*>(data);
+  if (WireFingerprint(bytes, size) != image_t::getHash()) return "not a valid image_t: wrong type";
+  if (size > static_cast<size_t>(INT_MAX) || !WireCheck<image_t>::Plausible(bytes, size)) {
+    return "not a valid image_t: lengths do not fit";
+  }
+  // Everything before the pixels, with a pixel count of 0, decodes as an
+  // image without pixels: a few hundred bytes copied instead of the image.
+  WireWalker walk(bytes, size);
+  walk.Skip(kHash + kHeader);
+  walk.SkipString();
+  walk.Skip(kImageFixed);
+  walk.StageTimes();
+  const size_t count_at = walk.position();
+  int64_t count = 0;
+  walk.Count(&count);
+  std::vector<uint8_t> head(bytes, bytes + count_at + 4);
+  std::fill(head.end() - 4, head.end(), uint8_t{0});
+  std::string why = DecodeMessage(head.data(), head.size(), fields);
+  if (!why.empty()) return why;
+  fields->size = static_cast<int32_t>(count);
+  *pixels = {bytes + count_at + 4, static_cast<size_t>(count)};
+  return {};
 }
 
 bool WireCheck<voxel_cloud_t>::Plausible(const uint8_t* data, size_t size) {

@@ -12,6 +12,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <exception>
+#include <span>
 #include <string>
 
 #include "shapesense/image_t.hpp"
@@ -76,5 +77,14 @@ std::string DecodeMessage(const void* data, size_t size, Message* out) {
   }
   return {};
 }
+
+// An image's fields decoded, its pixel bytes left where they are: `pixels`
+// views them at the end of `data` (image_t's bytes are its last field),
+// `fields->data` stays empty and `fields->size` counts them. For a service
+// that reads an image once, inside its LCM callback: the ~1 MB of a VGA
+// image is neither zeroed nor copied. "" on success, otherwise why the
+// buffer is not a valid image_t. Never throws.
+std::string DecodeImageFields(const void* data, size_t size, image_t* fields,
+                              std::span<const uint8_t>* pixels);
 
 }  // namespace shapesense

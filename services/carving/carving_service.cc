@@ -5,6 +5,7 @@
 #include "runtime/lcm/image_codec.h"
 #include "runtime/lcm/service_config.h"
 #include "runtime/lcm/service_loop.h"
+#include "runtime/lcm/wire_check.h"
 
 namespace shapesense {
 namespace {
@@ -58,19 +59,19 @@ CarvingService::CarvingService(const CarvingServiceOptions& options, RigSetup se
 
 void CarvingService::SubscribeToImages(const std::vector<std::string>& cameras) {
   if (!HasImageBuses(bus_.url())) {
-    bus_.Subscribe<image_t>(
+    bus_.SubscribeRaw(
         channels::kImagePattern,
-        [this](image_t&& image, const std::string& channel, int64_t receive_utime) {
-          OnImage(std::move(image), channel, "", receive_utime);
+        [this](std::span<const uint8_t> buffer, const std::string& channel, int64_t receive_utime) {
+          return OnImageBytes(buffer, channel, "", receive_utime);
         });
     return;
   }
   for (size_t k = 0; k < cameras.size(); ++k) {
-    image_buses_.ForCamera(k).Subscribe<image_t>(
+    image_buses_.ForCamera(k).SubscribeRaw(
         channels::kImagePattern,
-        [this, camera = cameras[k]](image_t&& image, const std::string& channel,
+        [this, camera = cameras[k]](std::span<const uint8_t> buffer, const std::string& channel,
                                     int64_t receive_utime) {
-          OnImage(std::move(image), channel, camera, receive_utime);
+          return OnImageBytes(buffer, channel, camera, receive_utime);
         });
   }
 }
@@ -81,29 +82,44 @@ std::vector<LcmBus*> CarvingService::Buses() const {
   return buses;
 }
 
-void CarvingService::OnImage(image_t&& image, const std::string& channel,
-                             const std::string& camera_of_bus, int64_t receive_utime) {
-  status_.Received();
-  if (const std::string error = ValidateImageMessage(image); !error.empty()) {
-    status_.Rejected();
-    status_.Note(error);
-    return;
+std::string CarvingService::OnImageBytes(std::span<const uint8_t> buffer,
+                                         const std::string& channel,
+                                         const std::string& camera_of_bus, int64_t receive_utime) {
+  image_t image;
+  std::span<const uint8_t> bytes;
+  if (std::string why = DecodeImageFields(buffer.data(), buffer.size(), &image, &bytes);
+      !why.empty()) {
+    return why;
   }
+  OnImage(std::move(image), bytes, channel, camera_of_bus, receive_utime);
+  return {};
+}
+
+bool CarvingService::AcceptableImage(const image_t& image, std::span<const uint8_t> bytes,
+                                     const std::string& channel, const std::string& camera_of_bus) {
+  std::string refusal = ValidateImageMessage(image, bytes);
   // Each camera's port carries that camera's images only.
-  if (!camera_of_bus.empty() && image.camera != camera_of_bus) {
-    status_.Rejected();
-    status_.Note(channel + ": image of camera '" + image.camera + "' on camera '" + camera_of_bus +
-                 "''s port");
-    return;
+  if (refusal.empty() && !camera_of_bus.empty() && image.camera != camera_of_bus) {
+    refusal = channel + ": image of camera '" + image.camera + "' on camera '" + camera_of_bus +
+              "''s port";
   }
   // A camera speaks for itself only: an image naming another camera than
   // its channel's could join that camera's frame-sets.
-  if (channel != channels::Image(image.camera)) {
-    status_.Rejected();
-    status_.Note(channel + ": image names camera '" + image.camera + "'");
-    return;
+  if (refusal.empty() && channel != channels::Image(image.camera)) {
+    refusal = channel + ": image names camera '" + image.camera + "'";
   }
-  std::optional<ArrivedView> arrived = PrepareOnArrival(image);
+  if (refusal.empty()) return true;
+  status_.Rejected();
+  status_.Note(refusal);
+  return false;
+}
+
+void CarvingService::OnImage(image_t&& image, std::span<const uint8_t> bytes,
+                             const std::string& channel, const std::string& camera_of_bus,
+                             int64_t receive_utime) {
+  status_.Received();
+  if (!AcceptableImage(image, bytes, channel, camera_of_bus)) return;
+  std::optional<ArrivedView> arrived = PrepareOnArrival(image, bytes);
   // Kept for the note on a rejection (the image moves into the assembler).
   const std::string camera = image.camera;
   const int64_t trigger_seq = image.trigger_seq;
@@ -132,13 +148,13 @@ int CarvingService::RigIndex(const std::string& camera) const {
   return -1;
 }
 
-std::optional<CarvingService::ArrivedView> CarvingService::PrepareOnArrival(const image_t& image) {
+std::optional<CarvingService::ArrivedView> CarvingService::PrepareOnArrival(
+    const image_t& image, std::span<const uint8_t> bytes) {
   const int camera = RigIndex(image.camera);
   if (camera < 0) return std::nullopt;  // the assembler refuses it
   ArrivedView arrived{IdentityOf(static_cast<size_t>(camera), image), view_pool_.Take()};
-  if (!stage_.PrepareView(arrived.image.camera, image, &arrived.view, &compact_scratch_).empty()) {
-    return std::nullopt;
-  }
+  // On failure the view keeps the reason, for the set to report.
+  stage_.PrepareView(arrived.image.camera, image, bytes, &arrived.view, &compact_scratch_);
   return arrived;
 }
 

@@ -10,6 +10,7 @@
 #include <functional>
 #include <optional>
 #include <ostream>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -97,9 +98,19 @@ class CarvingService {
 
  private:
   void SubscribeToImages(const std::vector<std::string>& cameras);
-  // `camera`: the camera whose bus it came on, or "" on the shared bus.
-  void OnImage(image_t&& image, const std::string& channel, const std::string& camera,
-               int64_t receive_utime);
+  // An image as received, read in place: its fields are decoded, its bytes
+  // only read into its silhouette (never copied). "" or why the buffer is
+  // no image_t. `camera`: the camera whose bus it came on, or "" on the
+  // shared bus.
+  std::string OnImageBytes(std::span<const uint8_t> buffer, const std::string& channel,
+                           const std::string& camera, int64_t receive_utime);
+  // `image`: its fields, its bytes in `bytes`.
+  void OnImage(image_t&& image, std::span<const uint8_t> bytes, const std::string& channel,
+               const std::string& camera, int64_t receive_utime);
+  // Whether an image may join the assembly: valid, on its camera's bus and
+  // channel. Counts and notes a refusal.
+  bool AcceptableImage(const image_t& image, std::span<const uint8_t> bytes,
+                       const std::string& channel, const std::string& camera);
   // The camera's index in the rig, or -1.
   int RigIndex(const std::string& camera) const;
   struct ArrivedView {
@@ -107,9 +118,9 @@ class CarvingService {
     PreparedView view;
   };
   // The view of an image about to be assembled, or nullopt when its camera
-  // is not the rig's or it does not decode (its set, if it completes,
-  // reports the error when carved).
-  std::optional<ArrivedView> PrepareOnArrival(const image_t& image);
+  // is not the rig's. One that does not decode keeps the reason, which its
+  // set, if it completes, reports as its error.
+  std::optional<ArrivedView> PrepareOnArrival(const image_t& image, std::span<const uint8_t> bytes);
   void CountAssemblyDrops(int64_t before);
   void CarveAndPublish(CarvingJob& job);
   void MaybePublishSilhouettes(const FrameSet& set);

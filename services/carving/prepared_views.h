@@ -31,8 +31,10 @@ ImageIdentity IdentityOf(size_t camera, const image_t& image);
 
 class PreparedViews {
  public:
-  // Holds at most `capacity` views; beyond it the oldest goes (its image's
-  // set, if it ever completes, prepares that view again).
+  // Holds at most `capacity` views; beyond it the oldest goes. The service
+  // keeps its images' fields only (their bytes are read in place), so a set
+  // whose view went fails to carve and is counted: the capacity allows for
+  // every image the assembler's pending sets can hold, and one set more.
   explicit PreparedViews(size_t capacity);
 
   // Keeps the view of an image the assembler accepted, replacing any view
@@ -41,7 +43,7 @@ class PreparedViews {
 
   // The views of a completed set's images (in rig order, as its images),
   // taken out; an image without one gets an empty view (end_utime 0), which
-  // CarvingStage::Carve prepares.
+  // CarvingStage::Carve prepares when the image still holds its bytes.
   std::vector<PreparedView> Take(const FrameSet& set);
 
   size_t size() const { return kept_.size(); }

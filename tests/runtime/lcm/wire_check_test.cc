@@ -6,7 +6,9 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <random>
+#include <span>
 
 #include "runtime/lcm/image_codec.h"
 #include "runtime/lcm/shape_message.h"
@@ -136,6 +138,45 @@ TEST(WireCheckTest, SilhouetteMessages) {
     }
     return largest;
   });
+}
+
+// An image's fields decoded in place equal lcm-gen's full decode, and its
+// bytes are viewed where they lie: the very bytes sent, none copied.
+TEST(WireCheckTest, ImageFieldsDecodeInPlaceAsTheFullDecode) {
+  std::mt19937 rng(13);
+  for (int trial = 0; trial < 40; ++trial) {
+    image_t sent = RandomImage(rng);
+    sent.trigger_seq = static_cast<int64_t>(rng());
+    sent.frame_id = static_cast<int64_t>(rng());
+    sent.device_timestamp_ns = static_cast<int64_t>(rng()) << 20;
+    const std::vector<uint8_t> bytes = Encode(sent);
+    image_t fields;
+    std::span<const uint8_t> pixels;
+    ASSERT_EQ(DecodeImageFields(bytes.data(), bytes.size(), &fields, &pixels), "");
+    EXPECT_TRUE(fields.data.empty());
+    EXPECT_EQ(fields.size, sent.size);
+    ASSERT_EQ(pixels.size(), sent.data.size());
+    EXPECT_EQ(pixels.data(), bytes.data() + bytes.size() - sent.data.size());
+    EXPECT_TRUE(std::equal(pixels.begin(), pixels.end(), sent.data.begin()));
+    fields.data.assign(pixels.begin(), pixels.end());
+    EXPECT_EQ(Encode(fields), bytes) << "every field as the full decode gives it";
+  }
+}
+
+TEST(WireCheckTest, ImageFieldsRefuseWhatTheFullDecodeRefuses) {
+  std::mt19937 rng(14);
+  const std::vector<uint8_t> bytes = Encode(RandomImage(rng));
+  image_t fields;
+  std::span<const uint8_t> pixels;
+  for (size_t cut : {size_t{1}, size_t{4}, bytes.size() / 2}) {
+    EXPECT_NE(DecodeImageFields(bytes.data(), bytes.size() - cut, &fields, &pixels), "");
+  }
+  const std::vector<uint8_t> voxels = Encode(voxel_cloud_t{});
+  EXPECT_NE(DecodeImageFields(voxels.data(), voxels.size(), &fields, &pixels).find("wrong type"),
+            std::string::npos);
+  std::vector<uint8_t> longer = bytes;
+  longer.push_back(0);
+  EXPECT_NE(DecodeImageFields(longer.data(), longer.size(), &fields, &pixels), "");
 }
 
 TEST(WireCheckTest, AHugeCountIsRefusedBeforeAnyAllocation) {
