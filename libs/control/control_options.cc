@@ -14,21 +14,12 @@ namespace {
 
 constexpr double kInfinity = std::numeric_limits<double>::infinity();
 
-// "" when low <= value <= high (each bound open when the flag says so).
-std::string ExpectWithin(const std::string& key, double value, double low, double high,
-                         bool low_open, bool high_open, const std::string& expected) {
-  const bool above = low_open ? value > low : value >= low;
-  const bool below = high_open ? value < high : value <= high;
-  if (std::isfinite(value) && above && below) return "";
-  return key + ": expected " + expected + ", got " + Number(value);
-}
-
 std::string ExpectPositive(const std::string& key, double value) {
-  return ExpectWithin(key, value, 0.0, kInfinity, true, true, "a positive number");
+  return ExpectWithin(key, value, {0.0, kInfinity, true, true}, "a positive number");
 }
 
 std::string ExpectNonNegative(const std::string& key, double value) {
-  return ExpectWithin(key, value, 0.0, kInfinity, false, true, "a number >= 0");
+  return ExpectWithin(key, value, {0.0, kInfinity, false, true}, "a number >= 0");
 }
 
 std::string FirstError(std::initializer_list<std::string> errors) {
@@ -103,16 +94,17 @@ TendonRange SafetyLimits::RangeOf(int tendon) const {
 
 std::string WatchdogOptions::Validate() const {
   if (std::string error = ExpectPositive("hold_age", hold_age); !error.empty()) return error;
-  return ExpectWithin("lost_age", lost_age, hold_age, kInfinity, true, true,
+  return ExpectWithin("lost_age", lost_age, {hold_age, kInfinity, true, true},
                       "a number of seconds above hold_age (" + Number(hold_age) + ")");
 }
 
 std::string WorkspaceOptions::Validate() const {
-  return FirstError({ExpectWithin("max_bend_angle", max_bend_angle, 0.0, 2.0 * std::numbers::pi,
-                                  true, false, "an angle in (0, 2 pi], rad"),
-                     ExpectWithin("max_distal_strain", max_distal_strain, 0.0, 0.5, true, false,
-                                  "a strain in (0, 0.5]"),
-                     ExpectPositive("tip_tolerance", tip_tolerance)});
+  return FirstError(
+      {ExpectWithin("max_bend_angle", max_bend_angle, {0.0, 2.0 * std::numbers::pi, true, false},
+                    "an angle in (0, 2 pi], rad"),
+       ExpectWithin("max_distal_strain", max_distal_strain, {0.0, 0.5, true, false},
+                    "a strain in (0, 0.5]"),
+       ExpectPositive("tip_tolerance", tip_tolerance)});
 }
 
 std::string ClosedLoopOptions::Validate() const {
@@ -121,16 +113,16 @@ std::string ClosedLoopOptions::Validate() const {
                      ExpectPositive("max_correction_bend", max_correction_bend),
                      ExpectPositive("max_correction_strain", max_correction_strain),
                      ExpectNonNegative("integral_deadband_mm", integral_deadband_mm),
-                     ExpectWithin("strain_proportional", strain_proportional, 0.0, 1.0, false,
-                                  false, "a fraction in [0, 1]")});
+                     ExpectWithin("strain_proportional", strain_proportional,
+                                  {0.0, 1.0, false, false}, "a fraction in [0, 1]")});
 }
 
 std::string ModelLessOptions::Validate() const {
   return FirstError({ExpectPositive("gain", gain), ExpectPositive("damping", damping),
-                     ExpectWithin("broyden_weight", broyden_weight, 0.0, 1.0, true, false,
+                     ExpectWithin("broyden_weight", broyden_weight, {0.0, 1.0, true, false},
                                   "a fraction in (0, 1]"),
                      ExpectPositive("min_update_step", min_update_step),
-                     ExpectWithin("model_prior_weight", model_prior_weight, 0.0, 1.0, false, true,
+                     ExpectWithin("model_prior_weight", model_prior_weight, {0.0, 1.0, false, true},
                                   "a fraction in [0, 1)"),
                      ExpectNonNegative("pretension_margin", pretension_margin)});
 }
@@ -140,12 +132,13 @@ std::string ControllerOptions::Validate() const {
   if (!ParseControlMode(mode, &parsed)) {
     return "mode: expected open_loop, closed_loop or model_less, got " + mode;
   }
-  return FirstError(
-      {ExpectWithin("loop_rate", loop_rate, 1.0, 10000.0, false, false, "a rate in [1, 10000], Hz"),
-       Prefixed("limits.", limits.Validate()), Prefixed("watchdog.", watchdog.Validate()),
-       Prefixed("workspace.", workspace.Validate()),
-       Prefixed("closed_loop.", closed_loop.Validate()),
-       Prefixed("model_less.", model_less.Validate())});
+  return FirstError({ExpectWithin("loop_rate", loop_rate, {1.0, 10000.0, false, false},
+                                  "a rate in [1, 10000], Hz"),
+                     Prefixed("limits.", limits.Validate()),
+                     Prefixed("watchdog.", watchdog.Validate()),
+                     Prefixed("workspace.", workspace.Validate()),
+                     Prefixed("closed_loop.", closed_loop.Validate()),
+                     Prefixed("model_less.", model_less.Validate())});
 }
 
 ControlMode ControllerOptions::control_mode() const {

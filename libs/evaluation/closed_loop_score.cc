@@ -188,12 +188,6 @@ void ShortenTour(const std::vector<Vec3>& points, std::vector<size_t>& tour) {
   }
 }
 
-std::string ExpectWithin(const std::string& key, double value, double low, double high,
-                         const std::string& expected) {
-  if (std::isfinite(value) && value >= low && value <= high) return "";
-  return key + ": expected " + expected + ", got " + Number(value);
-}
-
 }  // namespace
 
 int RunScore::targets_within(double mm) const {
@@ -241,10 +235,10 @@ std::string FormatExperimentTable(const std::vector<ExperimentTarget>& targets,
 std::string ExperimentTargetOptions::Validate() const {
   if (count < 1 || count > 1000) return "count: expected 1-1000, got " + std::to_string(count);
   for (const std::string& error :
-       {ExpectWithin("hold_s", hold_s, 1e-6, 1e6, "a positive number"),
-        ExpectWithin("first_start_s", first_start_s, 0.0, 1e6, "a number >= 0"),
-        ExpectWithin("max_bend_angle", max_bend_angle, 1e-6, kPi, "a number in (0, 3.14]"),
-        ExpectWithin("eps1", eps1, 0.0, 0.499, "a number in [0, 0.5)")}) {
+       {ExpectWithin("hold_s", hold_s, {0.0, 1e6, true}, "a positive number"),
+        ExpectWithin("first_start_s", first_start_s, {0.0, 1e6}, "a number >= 0"),
+        ExpectWithin("max_bend_angle", max_bend_angle, {0.0, kPi, true}, "a number in (0, 3.14]"),
+        ExpectWithin("eps1", eps1, {0.0, 0.5, false, true}, "a number in [0, 0.5)")}) {
     if (!error.empty()) return error;
   }
   return "";

@@ -7,10 +7,9 @@
 namespace shapesense {
 namespace {
 
-std::string ExpectFinite(const char* key, const std::array<double, 3>& values) {
+std::string ExpectAllFinite(const char* key, const std::array<double, 3>& values) {
   for (const double value : values) {
-    if (!std::isfinite(value))
-      return std::string(key) + ": expected finite numbers, got " + Number(value);
+    if (std::string error = ExpectFinite(key, value); !error.empty()) return error;
   }
   return {};
 }
@@ -18,10 +17,10 @@ std::string ExpectFinite(const char* key, const std::array<double, 3>& values) {
 }  // namespace
 
 std::string BasePose::Validate() const {
-  if (std::string error = ExpectFinite("base_position", base_position); !error.empty()) {
+  if (std::string error = ExpectAllFinite("base_position", base_position); !error.empty()) {
     return error;
   }
-  return ExpectFinite("base_rotation", base_rotation);
+  return ExpectAllFinite("base_rotation", base_rotation);
 }
 
 Pose3 BasePose::WorldFromBase() const {

@@ -17,11 +17,6 @@ std::string ExpectPositive(const std::string& key, double value) {
   return key + ": expected a positive number, got " + Number(value);
 }
 
-std::string ExpectFinite(const std::string& key, double value) {
-  if (std::isfinite(value)) return "";
-  return key + ": expected a finite number, got " + Number(value);
-}
-
 // Tendons closer to the axis than this carry no moment worth counting, mm.
 constexpr double kOnAxisRadius = 1e-9;
 

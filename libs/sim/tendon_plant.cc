@@ -12,12 +12,6 @@
 namespace shapesense {
 namespace {
 
-std::string ExpectWithin(const std::string& key, double value, double low, double high) {
-  if (std::isfinite(value) && value >= low && value <= high) return "";
-  return key + ": expected a number in [" + Number(low) + ", " + Number(high) + "], got " +
-         Number(value);
-}
-
 // Uniform in [-spread, spread], drawn even when spread is 0 so that one seed
 // gives the same draws whichever spreads are set.
 double Jitter(std::mt19937_64& rng, double spread) {
@@ -59,10 +53,10 @@ TendonModel CheckedPlantModel(const ManipulatorOptions& nominal, const TendonPla
 
 std::string PlantStiffnessFactors::Validate() const {
   for (const std::string& error :
-       {ExpectWithin("bend_x", bend_x, 0.5, 2.0), ExpectWithin("bend_z", bend_z, 0.5, 2.0),
-        ExpectWithin("axial_proximal", axial_proximal, 0.5, 2.0),
-        ExpectWithin("axial_distal", axial_distal, 0.5, 2.0),
-        ExpectWithin("tendon", tendon, 0.5, 2.0)}) {
+       {ExpectWithin("bend_x", bend_x, {0.5, 2.0}), ExpectWithin("bend_z", bend_z, {0.5, 2.0}),
+        ExpectWithin("axial_proximal", axial_proximal, {0.5, 2.0}),
+        ExpectWithin("axial_distal", axial_distal, {0.5, 2.0}),
+        ExpectWithin("tendon", tendon, {0.5, 2.0})}) {
     if (!error.empty()) return error;
   }
   return "";
@@ -73,9 +67,9 @@ std::string TendonPlantOptions::Validate() const {
     return "stiffness_factor." + error;
   }
   for (const std::string& error :
-       {ExpectWithin("random_stiffness_error", random_stiffness_error, 0.0, 0.5),
-        ExpectWithin("tendon_play", tendon_play, 0.0, 1e3),
-        ExpectWithin("tendon_play_spread", tendon_play_spread, 0.0, 1.0)}) {
+       {ExpectWithin("random_stiffness_error", random_stiffness_error, {0.0, 0.5}),
+        ExpectWithin("tendon_play", tendon_play, {0.0, 1e3}),
+        ExpectWithin("tendon_play_spread", tendon_play_spread, {0.0, 1.0})}) {
     if (!error.empty()) return error;
   }
   if (!std::isfinite(centerline_spacing) || centerline_spacing <= 0.0) {

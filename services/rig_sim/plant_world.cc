@@ -25,14 +25,6 @@ constexpr int64_t kNever = std::numeric_limits<int64_t>::min();
 // a poll every few ms while the actuators move, far more while they rest.
 constexpr size_t kHistorySize = 2048;
 
-std::string ExpectWithin(const std::string& key, double value, double low, double high,
-                         bool low_open = false) {
-  const bool above = low_open ? value > low : value >= low;
-  if (std::isfinite(value) && above && value <= high) return "";
-  return key + ": expected a number in " + (low_open ? "(" : "[") + Number(low) + ", " +
-         Number(high) + "], got " + Number(value);
-}
-
 Eigen::VectorXd Initial(const ManipulatorOptions& model, const PlantWorldOptions& options) {
   if (options.initial_displacements.empty()) {
     return Eigen::VectorXd::Zero(static_cast<Eigen::Index>(model.tendons.size()));
@@ -120,11 +112,11 @@ std::string PlantWorldOptions::Validate() const {
     }
   }
   for (const std::string& error :
-       {base.Validate(), ExpectWithin("actuator_speed", actuator_speed, 0.0, 1e6),
-        ExpectWithin("max_strain", max_strain, 0.0, 0.9, /*low_open=*/true),
-        ExpectWithin("max_bend_angle", max_bend_angle, 0.0, 4.0 * std::numbers::pi, true),
-        ExpectWithin("state_rate_hz", state_rate_hz, 1.0, 1000.0),
-        ExpectWithin("command_timeout_s", command_timeout_s, 0.0, 1e6)}) {
+       {base.Validate(), ExpectWithin("actuator_speed", actuator_speed, {0.0, 1e6}),
+        ExpectWithin("max_strain", max_strain, {0.0, 0.9, true}),
+        ExpectWithin("max_bend_angle", max_bend_angle, {0.0, 4.0 * std::numbers::pi, true}),
+        ExpectWithin("state_rate_hz", state_rate_hz, {1.0, 1000.0}),
+        ExpectWithin("command_timeout_s", command_timeout_s, {0.0, 1e6})}) {
     if (!error.empty()) return error;
   }
   return "";
