@@ -185,7 +185,7 @@ struct ModelLessOptions {
 
 struct ControllerOptions {
   std::string mode = "closed_loop";
-  // Rate of the control loop, Hz (the controller client's).
+  // Rate of the control loop, Hz (the controller service's).
   double loop_rate = 100.0;
   SafetyLimits limits;
   WatchdogOptions watchdog;

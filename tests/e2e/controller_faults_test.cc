@@ -20,12 +20,12 @@
 #include <sstream>
 #include <thread>
 
-#include "clients/controller/controller_config.h"
 #include "clients/tools/demo/demo_plan.h"
 #include "clients/tools/demo/demo_processes.h"
 #include "clients/tools/demo/demo_session.h"
 #include "libs/sim/scene_generators.h"
 #include "runtime/lcm/channels.h"
+#include "services/controller/controller_config.h"
 #include "shapesense/configuration_target_t.hpp"
 #include "shapesense/tendon_command_t.hpp"
 #include "tests/e2e/live_pipeline.h"

@@ -7,7 +7,6 @@
 #include <set>
 #include <utility>
 
-#include "clients/controller/controller_config.h"
 #include "clients/tools/demo/demo_session.h"
 #include "libs/control/targets.h"
 #include "libs/core/error.h"
@@ -17,6 +16,7 @@
 #include "runtime/file_io.h"
 #include "runtime/lcm/channels.h"
 #include "runtime/lcm/shape_message.h"
+#include "services/controller/controller_config.h"
 #include "shapesense/configuration_target_t.hpp"
 #include "shapesense/tendon_command_t.hpp"
 
@@ -34,7 +34,7 @@ constexpr double kProgressPeriodS = 5.0;
 struct ExperimentFiles {
   fs::path plant;       // the rig-sim's --plant
   fs::path shape;       // the shape service's --config
-  fs::path controller;  // the controller client's --config
+  fs::path controller;  // the controller service's --config
 };
 
 ExperimentFiles FindFiles(const ExperimentArgs& args) {

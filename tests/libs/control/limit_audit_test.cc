@@ -63,7 +63,7 @@ TEST_F(LimitAuditTest, NeverFlagsWhatTheSafetyGateLetsThrough) {
     const int k = kind(rng);
     // Now and then a late step (capped at max_step_period by both).
     utime += k == 0 ? 400'000 : period_us(rng);
-    // dt as the controller client takes it: a difference of times since start.
+    // dt as the controller service takes it: a difference of times since start.
     const double time = static_cast<double>(utime - start) * 1e-6;
     const double dt = time - last_time;
     last_time = time;

@@ -15,7 +15,7 @@
 #include <limits>
 #include <random>
 
-#include "clients/controller/rig_plant_driver.h"
+#include "services/controller/rig_plant_driver.h"
 #include "libs/config/options_yaml.h"
 #include "libs/core/error.h"
 #include "libs/geometry/polyline.h"

@@ -1,4 +1,0 @@
-// shapesense-controller: tendon control on the sensed shape (controller_command.h).
-#include "clients/controller/controller_command.h"
-
-int main(int argc, char** argv) { return shapesense::ControllerMain(argc, argv); }
