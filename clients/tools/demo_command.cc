@@ -6,11 +6,11 @@
 #include <memory>
 
 #include "clients/tools/demo/closed_loop_experiment.h"
-#include "clients/tools/demo/demo_network.h"
 #include "clients/tools/demo/live_demo.h"
 #include "clients/tools/demo/offline_demo.h"
 #include "libs/core/error.h"
 #include "runtime/lcm/service_loop.h"
+#include "runtime/process/private_network.h"
 
 namespace shapesense {
 namespace {
@@ -30,15 +30,15 @@ struct DemoCommandArgs {
   bool no_replay = false;
 };
 
-DemoNetworkMode ParseNetwork(const std::string& network) {
-  if (network == "private") return DemoNetworkMode::kPrivate;
-  if (network == "current") return DemoNetworkMode::kCurrent;
-  return DemoNetworkMode::kAuto;
+NetworkMode ParseNetwork(const std::string& network) {
+  if (network == "private") return NetworkMode::kPrivate;
+  if (network == "current") return NetworkMode::kCurrent;
+  return NetworkMode::kAuto;
 }
 
 // GigE needs the namespace's 127.0.0.x addresses; without one, the capture
 // service renders the cameras itself.
-DemoCameras ChooseCameras(const DemoCommandArgs& args, const DemoNetwork& network) {
+DemoCameras ChooseCameras(const DemoCommandArgs& args, const NetworkChoice& network) {
   if (args.cameras == "simulated") return DemoCameras::kSimulated;
   if (args.cameras == "gige") {
     if (!network.private_namespace && args.network == "auto") {
@@ -60,7 +60,7 @@ void RunOffline(const DemoCommandArgs& args) {
 
 void RunLive(DemoCommandArgs& args) {
   // First, while this process has a single thread.
-  const DemoNetwork network = EnterDemoNetwork(ParseNetwork(args.network), kLoopbackAddresses);
+  const NetworkChoice network = EnterNetwork(ParseNetwork(args.network), kLoopbackAddresses);
   const std::atomic<bool>& stop = StopFlagOnSignals();
   LiveDemoArgs& live = args.live;
   live.cameras = ChooseCameras(args, network);
@@ -83,7 +83,7 @@ void RunLive(DemoCommandArgs& args) {
 
 // The plant lives in the rig-sim, whose cameras need the namespace's addresses.
 void RunExperiment(DemoCommandArgs& args) {
-  const DemoNetwork network = EnterDemoNetwork(ParseNetwork(args.network), kLoopbackAddresses);
+  const NetworkChoice network = EnterNetwork(ParseNetwork(args.network), kLoopbackAddresses);
   const std::atomic<bool>& stop = StopFlagOnSignals();
   if (!network.private_namespace) {
     throw InputError(

@@ -21,10 +21,10 @@
 #include <thread>
 
 #include "clients/tools/demo/demo_plan.h"
-#include "clients/tools/demo/demo_processes.h"
 #include "clients/tools/demo/demo_session.h"
 #include "libs/sim/scene_generators.h"
 #include "runtime/lcm/channels.h"
+#include "runtime/process/process_group.h"
 #include "services/controller/controller_config.h"
 #include "shapesense/configuration_target_t.hpp"
 #include "shapesense/tendon_command_t.hpp"
@@ -71,10 +71,10 @@ class ControllerFaultsTest : public ::testing::Test {
     for (const Camera& camera : rig_.cameras) settings_.camera_names.push_back(camera.name);
     plan_ = MakeDemoPlan(settings_);
     PrepareOutput(plan_, rig_);
-    processes_ = std::make_unique<DemoProcesses>(
+    processes_ = std::make_unique<ProcessGroup>(
         plan_.logs_dir, stop_,
-        DemoProcesses::Hooks{[this](int ms) { Pump(bus_, ms); },
-                             [this](const std::string& s) { return heard_.statuses.contains(s); }});
+        ProcessGroup::Hooks{[this](int ms) { Pump(bus_, ms); },
+                            [this](const std::string& s) { return heard_.statuses.contains(s); }});
     Listen();
   }
   void TearDown() override {
@@ -95,7 +95,7 @@ class ControllerFaultsTest : public ::testing::Test {
         });
   }
 
-  // Lets the bus work for `s` seconds; throws DemoFailure when a program ended.
+  // Lets the bus work for `s` seconds; throws ProgramFailure when a program ended.
   void Wait(double s) {
     const auto end = std::chrono::steady_clock::now() + std::chrono::duration<double>(s);
     while (std::chrono::steady_clock::now() < end) {
@@ -127,7 +127,7 @@ class ControllerFaultsTest : public ::testing::Test {
   LcmBus bus_{kDemoLcmUrl};
   Heard heard_;
   std::atomic<bool> stop_{false};
-  std::unique_ptr<DemoProcesses> processes_;  // made in SetUp, once out_ is known
+  std::unique_ptr<ProcessGroup> processes_;  // made in SetUp, once out_ is known
 };
 
 // The last command at or before `utime`.
@@ -144,7 +144,7 @@ TEST_F(ControllerFaultsTest, BadTargetsLostSensingAndACutLinkAreHandledSafely) {
   ASSERT_TRUE(StartAll(*processes_, plan_.background, log));
   processes_->StopAll();
   ASSERT_TRUE(StartAll(*processes_, plan_.pipeline, log)) << log.str();
-  const DemoProcess controller = ControllerRun(settings_, config_ / "controller_client.yaml",
+  const ProgramSpec controller = ControllerRun(settings_, config_ / "controller_client.yaml",
                                                "closed_loop", out_ / "closed_loop");
   ASSERT_TRUE(processes_->Start(controller, kDemoStartTimeout));
   Wait(1.0);

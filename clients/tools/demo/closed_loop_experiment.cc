@@ -221,7 +221,7 @@ void PrintProgress(const ExperimentReport& report, const std::string& mode, doub
 class RunDriver {
  public:
   RunDriver(const ExperimentArgs& args, const DemoSettings& settings, const fs::path& controller,
-            DemoProcesses& processes, LcmBus& bus, ExperimentListener& listener,
+            ProcessGroup& processes, LcmBus& bus, ExperimentListener& listener,
             const std::atomic<bool>& stop, std::ostream& log)
       : args_(args),
         settings_(settings),
@@ -234,7 +234,7 @@ class RunDriver {
 
   // False when stopped meanwhile.
   bool Run(const std::string& mode, ExperimentReport& report, ExperimentRun& run) {
-    const DemoProcess process = ControllerRun(settings_, controller_, mode, settings_.out / mode);
+    const ProgramSpec process = ControllerRun(settings_, controller_, mode, settings_.out / mode);
     fs::create_directories(settings_.out / mode);
     listener_.BeginRun(&run);
     log_ << "  starting " << process.name << std::endl;
@@ -274,7 +274,7 @@ class RunDriver {
   const ExperimentArgs& args_;
   const DemoSettings& settings_;
   const fs::path controller_;
-  DemoProcesses& processes_;
+  ProcessGroup& processes_;
   LcmBus& bus_;
   ExperimentListener& listener_;
   const std::atomic<bool>& stop_;
@@ -355,7 +355,7 @@ void PrintRunSummary(const ExperimentRun& run, std::ostream& log) {
 // The backgrounds, the pipeline, then one controller run per mode; false
 // when stopped before the end.
 bool RunPhases(const ExperimentArgs& args, const DemoPlan& plan, const DemoSettings& settings,
-               const ExperimentFiles& files, DemoProcesses& processes, LcmBus& bus,
+               const ExperimentFiles& files, ProcessGroup& processes, LcmBus& bus,
                ExperimentListener& listener, const std::atomic<bool>& stop,
                ExperimentReport& report, std::ostream& log) {
   log << "backgrounds: the rig showing its backdrop alone" << std::endl;
@@ -500,7 +500,7 @@ ExperimentReport RunClosedLoopExperiment(const ExperimentArgs& args, const std::
   DemoScorer scorer;
   ExperimentListener listener(bus, scorer,
                               SafetyEnvelope(view.model, view.setup.controller.limits));
-  DemoProcesses processes(
+  ProcessGroup processes(
       plan.logs_dir, stop,
       {[&bus](int ms) { Pump(bus, ms); },
        [&listener](const std::string& service) { return listener.StatusSeen(service); }});
@@ -508,7 +508,7 @@ ExperimentReport RunClosedLoopExperiment(const ExperimentArgs& args, const std::
     report.interrupted =
         !RunPhases(args, plan, settings, files, processes, bus, listener, stop, report, log);
     StopPipeline(processes, bus, scorer);
-  } catch (const DemoFailure& e) {
+  } catch (const ProgramFailure& e) {
     processes.StopAll();
     report.failure = e.what();
     report.programs = processes.ends();

@@ -26,11 +26,11 @@
 #include <string>
 #include <vector>
 
-#include "clients/tools/demo/demo_processes.h"
 #include "clients/tools/demo/demo_scorer.h"
 #include "clients/tools/demo/live_demo.h"
 #include "libs/control/limit_audit.h"
 #include "libs/evaluation/closed_loop_score.h"
+#include "runtime/process/process_group.h"
 
 namespace shapesense {
 
@@ -85,7 +85,7 @@ struct ExperimentReport {
 // or from the working directory; empty when neither has rig_plant.yaml.
 std::filesystem::path FindConfigDir();
 
-// Runs it; `stop` (Ctrl-C) ends it early, cleanly. Throws DemoFailure naming
+// Runs it; `stop` (Ctrl-C) ends it early, cleanly. Throws ProgramFailure naming
 // a program that is missing, failed to start or ended early (report.json
 // says so too), InputError on bad arguments or config files.
 ExperimentReport RunClosedLoopExperiment(const ExperimentArgs& args, const std::atomic<bool>& stop,

@@ -1,5 +1,7 @@
 #include "clients/tools/demo/demo_plan.h"
 
+#include <unistd.h>
+
 #include <algorithm>
 #include <charconv>
 #include <sstream>
@@ -15,7 +17,7 @@ namespace {
 // none outlives a demo that was killed outright.
 // The backgrounds are grabbed one camera after another: at least this fast.
 constexpr double kBackgroundRateHz = 30.0;
-// The nice value of the programs that stand for hardware (DemoProcess::nice).
+// The nice value of the programs that stand for hardware (ProgramSpec::nice).
 constexpr int kHardwareNice = -10;
 
 std::string Backstop(const DemoSettings& settings) {
@@ -54,8 +56,8 @@ std::string GigEAddresses(const DemoSettings& settings) {
   return addresses;
 }
 
-DemoProcess RigSim(const DemoSettings& settings, const DemoPlan& plan, bool backdrop_only) {
-  DemoProcess process{backdrop_only ? "rig-sim-backdrop" : "rig-sim",
+ProgramSpec RigSim(const DemoSettings& settings, const DemoPlan& plan, bool backdrop_only) {
+  ProgramSpec process{backdrop_only ? "rig-sim-backdrop" : "rig-sim",
                       {Program(settings, "shapesense-rig-sim"), "--rig", plan.rig.string(),
                        "--seed", std::to_string(settings.seed), "--ips", GigEAddresses(settings),
                        "--lcm-url", settings.lcm_url, "--duration", Backstop(settings)},
@@ -78,8 +80,8 @@ std::vector<std::string> CaptureCameras(const DemoSettings& settings, const Demo
   return {"--config", plan.capture_config.string()};
 }
 
-DemoProcess CaptureBackground(const DemoSettings& settings, const DemoPlan& plan) {
-  DemoProcess process{
+ProgramSpec CaptureBackground(const DemoSettings& settings, const DemoPlan& plan) {
+  ProgramSpec process{
       "capture-background", {Program(settings, "shapesense-capture")}, "", "", true};
   for (const std::string& flag : CaptureCameras(settings, plan)) process.argv.push_back(flag);
   for (const std::string& arg :
@@ -92,8 +94,8 @@ DemoProcess CaptureBackground(const DemoSettings& settings, const DemoPlan& plan
   return process;
 }
 
-DemoProcess Capture(const DemoSettings& settings, const DemoPlan& plan) {
-  DemoProcess process{"capture",
+ProgramSpec Capture(const DemoSettings& settings, const DemoPlan& plan) {
+  ProgramSpec process{"capture",
                       {Program(settings, "shapesense-capture"), "--lcm-url", settings.lcm_url,
                        "--rate", ExactNumber(settings.rate_hz), "--duration", Backstop(settings)},
                       "",
@@ -106,8 +108,8 @@ DemoProcess Capture(const DemoSettings& settings, const DemoPlan& plan) {
 
 // The carving and shape services: defaults, the demo's rig, and the
 // backgrounds for the carving service (the shape service gets silhouettes).
-DemoProcess Service(const DemoSettings& settings, const DemoPlan& plan, const std::string& name) {
-  DemoProcess process{name,
+ProgramSpec Service(const DemoSettings& settings, const DemoPlan& plan, const std::string& name) {
+  ProgramSpec process{name,
                       {Program(settings, "shapesense-" + name), "--lcm-url", settings.lcm_url,
                        "--rig", plan.rig.string(), "--duration", Backstop(settings)},
                       "",
@@ -124,8 +126,8 @@ DemoProcess Service(const DemoSettings& settings, const DemoPlan& plan, const st
   return process;
 }
 
-DemoProcess Logger(const DemoSettings& settings, const DemoPlan& plan) {
-  DemoProcess process{
+ProgramSpec Logger(const DemoSettings& settings, const DemoPlan& plan) {
+  ProgramSpec process{
       "lcm-logger",
       {settings.lcm_logger.string(), "--lcm-url=" + settings.lcm_url, "--force", plan.log.string()},
       "Opening log file",
@@ -138,7 +140,7 @@ DemoProcess Logger(const DemoSettings& settings, const DemoPlan& plan) {
 }
 
 // The logger of camera k's images, on that camera's port.
-DemoProcess ImageLogger(const DemoSettings& settings, const DemoPlan& plan, size_t k) {
+ProgramSpec ImageLogger(const DemoSettings& settings, const DemoPlan& plan, size_t k) {
   return {"lcm-logger-" + settings.camera_names[k],
           {settings.lcm_logger.string(), "--lcm-url=" + ImageUrl(settings.lcm_url, k), "--force",
            plan.image_logs[k].string()},
@@ -165,7 +167,7 @@ std::string CameraSourceName(DemoCameras cameras) {
   return cameras == DemoCameras::kGigE ? "gige" : "simulated";
 }
 
-DemoProcess ControllerRun(const DemoSettings& settings, const fs::path& config,
+ProgramSpec ControllerRun(const DemoSettings& settings, const fs::path& config,
                           const std::string& mode, const fs::path& log_dir) {
   return {"controller-" + mode,
           {Program(settings, "shapesense-controller"), "--config", config.string(), "--mode", mode,
@@ -209,6 +211,38 @@ DemoPlan MakeDemoPlan(const DemoSettings& settings) {
   plan.pipeline.push_back(Service(settings, plan, "shape"));
   plan.pipeline.push_back(Capture(settings, plan));
   return plan;
+}
+
+namespace {
+
+std::string WhatToDo(const fs::path& program) {
+  if (program.filename().string().starts_with("shapesense")) {
+    return "build it: bash deploy/build.sh release (or ninja -C <build> " +
+           program.filename().string() + ")";
+  }
+  return "install it: apt-get install liblcm-bin";
+}
+
+std::vector<const ProgramSpec*> AllProcesses(const DemoPlan& plan) {
+  std::vector<const ProgramSpec*> all;
+  for (const ProgramSpec& process : plan.background) all.push_back(&process);
+  for (const ProgramSpec& process : plan.pipeline) all.push_back(&process);
+  return all;
+}
+
+}  // namespace
+
+std::vector<std::string> MissingPrograms(const DemoPlan& plan) {
+  std::vector<std::string> missing;
+  for (const ProgramSpec* process : AllProcesses(plan)) {
+    const fs::path program = process->argv.front();
+    const std::string line = program.string() + " is missing; " + WhatToDo(program);
+    if (access(program.c_str(), X_OK) != 0 &&
+        std::find(missing.begin(), missing.end(), line) == missing.end()) {
+      missing.push_back(line);
+    }
+  }
+  return missing;
 }
 
 }  // namespace shapesense

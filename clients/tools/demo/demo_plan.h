@@ -8,6 +8,8 @@
 #include <string>
 #include <vector>
 
+#include "runtime/process/process_group.h"
+
 namespace shapesense {
 
 // Where the camera images come from.
@@ -50,24 +52,6 @@ struct DemoSettings {
 inline constexpr const char* kControlChannels =
     "SHAPESENSE_(SHAPE|TRUTH|TARGET|ESTOP|TENDON_.*|PLANT_.*|STATUS_.*)";
 
-// One program of the demo.
-struct DemoProcess {
-  std::string name;  // short, for messages and its log file: "rig-sim", "capture", ...
-  std::vector<std::string> argv;
-  // It is up once its output has a line containing `ready_line`, or once its
-  // service status has arrived on LCM (`ready_status`, the service's name);
-  // neither: once started.
-  std::string ready_line;
-  std::string ready_status;
-  // It runs to its end (a one-off job) instead of until the demo stops it.
-  bool runs_to_end = false;
-  // Its nice value (0: the demo's). The virtual rig's cameras and the
-  // capture service's triggers stand for hardware and a real-time process:
-  // raised where allowed (as root), so that another load on the machine
-  // delays the measuring, not the exposures.
-  int nice = 0;
-};
-
 struct DemoPlan {
   std::filesystem::path rig;             // written by the demo before anything starts
   std::filesystem::path backgrounds;     // <camera>.png, made by the first phase
@@ -81,19 +65,23 @@ struct DemoPlan {
   std::filesystem::path report;
   std::filesystem::path replay_shapes;  // the replay's JSON lines
   // Phase 1, the backgrounds: started in order; the last runs to its end.
-  std::vector<DemoProcess> background;
+  std::vector<ProgramSpec> background;
   // Phase 2, the live pipeline, in start order; stopped in the reverse order
   // (capture first, so that the last frame-sets drain through before the
   // services and the logger stop).
-  std::vector<DemoProcess> pipeline;
+  std::vector<ProgramSpec> pipeline;
 };
 
 DemoPlan MakeDemoPlan(const DemoSettings& settings);
 
+// The programs of `plan` that are missing or not executable, each with what
+// to do about it; empty when all are there.
+std::vector<std::string> MissingPrograms(const DemoPlan& plan);
+
 // One run of shapesense-controller in the closed-loop experiment: `config`
 // (config/controller_client.yaml) in `mode`, its targets streamed, its logs
 // in `log_dir`. Up once its status ("controller") has arrived.
-DemoProcess ControllerRun(const DemoSettings& settings, const std::filesystem::path& config,
+ProgramSpec ControllerRun(const DemoSettings& settings, const std::filesystem::path& config,
                           const std::string& mode, const std::filesystem::path& log_dir);
 
 }  // namespace shapesense

@@ -8,9 +8,9 @@
 #include <string>
 #include <vector>
 
-#include "clients/tools/demo/demo_processes.h"
 #include "clients/tools/demo/demo_scorer.h"
 #include "clients/tools/demo/replay_check.h"
+#include "runtime/process/process_group.h"
 
 namespace shapesense {
 

@@ -60,7 +60,7 @@ void ThrowIfMissing(const DemoPlan& plan) {
   if (missing.empty()) return;
   std::string message = "the demo cannot run:";
   for (const std::string& line : missing) message += "\n  " + line;
-  throw DemoFailure("", message);
+  throw ProgramFailure("", message);
 }
 
 // Handles the bus for about `ms` (LCM's wait ends at each message).
@@ -76,7 +76,7 @@ void Pump(LcmBus& bus, int ms) {
 // Starts all but the last side by side, and the last (the one that needs
 // the others: the capture service) once they are all up. False when stopped
 // meanwhile.
-bool StartAll(DemoProcesses& processes, const std::vector<DemoProcess>& list, std::ostream& log) {
+bool StartAll(ProcessGroup& processes, const std::vector<ProgramSpec>& list, std::ostream& log) {
   if (list.empty()) return true;
   const size_t last = list.size() - 1;
   for (size_t i = 0; i < last; ++i) {
@@ -92,7 +92,7 @@ bool StartAll(DemoProcesses& processes, const std::vector<DemoProcess>& list, st
 
 // The capture service first; then the frame-sets in flight drain through
 // (no new shape for a while) before the services and the logger stop.
-void StopPipeline(DemoProcesses& processes, LcmBus& bus, const DemoScorer& scorer) {
+void StopPipeline(ProcessGroup& processes, LcmBus& bus, const DemoScorer& scorer) {
   processes.Stop("capture");
   const auto deadline = Clock::now() + std::chrono::seconds(5);
   auto quiet_since = Clock::now();

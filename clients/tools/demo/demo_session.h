@@ -9,10 +9,10 @@
 #include <vector>
 
 #include "clients/tools/demo/demo_plan.h"
-#include "clients/tools/demo/demo_processes.h"
 #include "clients/tools/demo/demo_scorer.h"
 #include "libs/camera/camera.h"
 #include "runtime/lcm/lcm_bus.h"
+#include "runtime/process/process_group.h"
 
 namespace shapesense {
 
@@ -31,17 +31,17 @@ DemoSettings BaseDemoSettings(const std::filesystem::path& bin_dir,
 void PrepareOutput(const DemoPlan& plan, const Rig& rig);
 // Says so when the kernel caps socket buffers below what image receivers ask.
 void WarnIfSocketBuffersAreSmall(std::ostream& log);
-// Throws DemoFailure listing every program of `plan` that is missing.
+// Throws ProgramFailure listing every program of `plan` that is missing.
 void ThrowIfMissing(const DemoPlan& plan);
 // Handles the bus for about `ms` (LCM's wait ends at each message).
 void Pump(LcmBus& bus, int ms);
 // Starts all but the last side by side, and the last (the one that needs
 // the others: the capture service) once they are all up. False when stopped
 // meanwhile.
-bool StartAll(DemoProcesses& processes, const std::vector<DemoProcess>& list, std::ostream& log);
+bool StartAll(ProcessGroup& processes, const std::vector<ProgramSpec>& list, std::ostream& log);
 // Stops the capture service first; then the frame-sets in flight drain
 // through (no new shape for a while) before the rest stop.
-void StopPipeline(DemoProcesses& processes, LcmBus& bus, const DemoScorer& scorer);
+void StopPipeline(ProcessGroup& processes, LcmBus& bus, const DemoScorer& scorer);
 // Seconds on the steady clock since `start`.
 double SecondsSince(std::chrono::steady_clock::time_point start);
 // A file's size, 0 when it is not there.

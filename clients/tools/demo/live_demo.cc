@@ -79,7 +79,7 @@ class ProgressPrinter {
 };
 
 // The measured run: until the duration has passed or `stop`; returns its length, s.
-double Measure(const LiveDemoArgs& args, DemoProcesses& processes, LcmBus& bus,
+double Measure(const LiveDemoArgs& args, ProcessGroup& processes, LcmBus& bus,
                const DemoScorer& scorer, const std::atomic<bool>& stop, std::ostream& log) {
   const auto start = Clock::now();
   ProgressPrinter progress(args.progress, log);
@@ -122,16 +122,16 @@ LiveDemoReport StartReport(const LiveDemoArgs& args, const DemoSettings& setting
   return report;
 }
 
-void FinishReport(LiveDemoReport& report, const DemoProcesses& processes, const DemoPlan& plan) {
+void FinishReport(LiveDemoReport& report, const ProcessGroup& processes, const DemoPlan& plan) {
   report.programs = processes.ends();
   report.log_bytes = FileBytes(plan.log);
   WriteFileAtomically(plan.report, LiveReportToJson(report).dump(2) + "\n");
 }
 
 // Both phases and the run; false when stopped before the end.
-bool RunPhases(const LiveDemoArgs& args, const DemoPlan& plan, DemoProcesses& processes,
-               LcmBus& bus, const DemoScorer& scorer, const std::atomic<bool>& stop,
-               LiveDemoReport& report, std::ostream& log) {
+bool RunPhases(const LiveDemoArgs& args, const DemoPlan& plan, ProcessGroup& processes, LcmBus& bus,
+               const DemoScorer& scorer, const std::atomic<bool>& stop, LiveDemoReport& report,
+               std::ostream& log) {
   log << "backgrounds: the rig showing its backdrop alone, " << plan.backgrounds.string()
       << std::endl;
   if (!StartAll(processes, plan.background, log)) return false;
@@ -169,13 +169,13 @@ LiveDemoReport RunLiveDemo(const LiveDemoArgs& args, const std::atomic<bool>& st
   LcmBus bus(settings.lcm_url);
   DemoScorer scorer;
   Subscribe(bus, scorer);
-  DemoProcesses processes(plan.logs_dir, stop,
-                          {[&bus](int ms) { Pump(bus, ms); },
-                           [&scorer](const std::string& s) { return scorer.StatusSeen(s); }});
+  ProcessGroup processes(plan.logs_dir, stop,
+                         {[&bus](int ms) { Pump(bus, ms); },
+                          [&scorer](const std::string& s) { return scorer.StatusSeen(s); }});
   LiveDemoReport report = StartReport(args, settings, plan);
   try {
     report.interrupted = !RunPhases(args, plan, processes, bus, scorer, stop, report, log);
-  } catch (const DemoFailure& e) {
+  } catch (const ProgramFailure& e) {
     processes.StopAll();
     report.failure = e.what();
     FinishReport(report, processes, plan);

@@ -42,7 +42,7 @@ struct LiveDemoArgs {
 // stopped, the log closed, the summary of what ran printed and written.
 // Writes out/report.json (LiveReportToJson), out/pipeline.lcm,
 // out/replay_shapes.jsonl, out/logs/<program>.log and out/setup/. Throws
-// DemoFailure naming a program that is missing, failed to start or ended
+// ProgramFailure naming a program that is missing, failed to start or ended
 // early (with its last output; report.json says so too), InputError on bad
 // arguments.
 LiveDemoReport RunLiveDemo(const LiveDemoArgs& args, const std::atomic<bool>& stop,

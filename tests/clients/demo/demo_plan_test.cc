@@ -40,17 +40,17 @@ bool Has(const std::vector<std::string>& argv, const std::string& arg) {
   return std::find(argv.begin(), argv.end(), arg) != argv.end();
 }
 
-const DemoProcess& Find(const std::vector<DemoProcess>& list, const std::string& name) {
+const ProgramSpec& Find(const std::vector<ProgramSpec>& list, const std::string& name) {
   const auto found =
-      std::find_if(list.begin(), list.end(), [&](const DemoProcess& p) { return p.name == name; });
+      std::find_if(list.begin(), list.end(), [&](const ProgramSpec& p) { return p.name == name; });
   if (found == list.end()) throw std::runtime_error("no process " + name);
   return *found;
 }
 
-std::vector<std::string> Names(const std::vector<DemoProcess>& list) {
+std::vector<std::string> Names(const std::vector<ProgramSpec>& list) {
   std::vector<std::string> names;
   names.reserve(list.size());
-  for (const DemoProcess& p : list) names.push_back(p.name);
+  for (const ProgramSpec& p : list) names.push_back(p.name);
   return names;
 }
 
@@ -83,7 +83,7 @@ std::vector<std::pair<std::string, std::string>> AravisCameras(
 
 void ExpectEveryProgramEndsByItself(const DemoPlan& plan, const DemoSettings& settings) {
   for (const auto* list : {&plan.background, &plan.pipeline}) {
-    for (const DemoProcess& p : *list) {
+    for (const ProgramSpec& p : *list) {
       // A logger is stopped by the demo, a job ends by itself.
       if (p.name.rfind("lcm-logger", 0) == 0 || p.runs_to_end) continue;
       EXPECT_GT(std::stod(ValueOf(p.argv, "--duration")), settings.duration_s + 60.0) << p.name;
@@ -96,8 +96,8 @@ TEST(DemoPlanTest, GigEPipelineReadsExactlyTheCamerasTheRigSimServes) {
   for (int trial = 0; trial < 20; ++trial) {
     const DemoSettings settings = RandomSettings(random, DemoCameras::kGigE);
     const DemoPlan plan = MakeDemoPlan(settings);
-    const DemoProcess& rig_sim = Find(plan.pipeline, "rig-sim");
-    const DemoProcess& capture = Find(plan.pipeline, "capture");
+    const ProgramSpec& rig_sim = Find(plan.pipeline, "rig-sim");
+    const ProgramSpec& capture = Find(plan.pipeline, "capture");
     std::string addresses;
     const auto cameras = AravisCameras(capture.argv);
     ASSERT_EQ(cameras.size(), settings.camera_names.size());
@@ -121,7 +121,7 @@ TEST(DemoPlanTest, BackgroundsComeFromTheBackdropAloneBeforeThePipeline) {
     const DemoSettings settings = RandomSettings(random, cameras);
     const DemoPlan plan = MakeDemoPlan(settings);
     ASSERT_FALSE(plan.background.empty());
-    const DemoProcess& job = plan.background.back();
+    const ProgramSpec& job = plan.background.back();
     EXPECT_TRUE(job.runs_to_end);
     EXPECT_EQ(ValueOf(job.argv, "--out"), plan.backgrounds.string());
     EXPECT_TRUE(Has(job.argv, "background"));
@@ -130,7 +130,7 @@ TEST(DemoPlanTest, BackgroundsComeFromTheBackdropAloneBeforeThePipeline) {
       EXPECT_EQ(AravisCameras(job.argv).size(), settings.camera_names.size());
     }
     for (const char* service : {"carving", "shape"}) {
-      const DemoProcess& p = Find(plan.pipeline, service);
+      const ProgramSpec& p = Find(plan.pipeline, service);
       EXPECT_EQ(ValueOf(p.argv, "--rig"), plan.rig.string());
       EXPECT_EQ(p.ready_status, service) << "up once its status is on LCM";
     }
@@ -154,13 +154,13 @@ TEST(DemoPlanTest, EveryProgramOnTheRigsUrlEachCamerasImagesLoggedOnItsPort) {
     EXPECT_EQ(names.back(), "capture");
     ASSERT_EQ(plan.image_logs.size(), settings.camera_names.size());
     for (size_t k = 0; k < settings.camera_names.size(); ++k) {
-      const DemoProcess& logger = Find(plan.pipeline, "lcm-logger-" + settings.camera_names[k]);
+      const ProgramSpec& logger = Find(plan.pipeline, "lcm-logger-" + settings.camera_names[k]);
       EXPECT_TRUE(Has(logger.argv, "--lcm-url=" + ImageUrl(settings.lcm_url, k)));
       EXPECT_EQ(logger.argv.back(), plan.image_logs[k].string());
       EXPECT_LT(std::find(names.begin(), names.end(), logger.name) - names.begin(),
                 std::find(names.begin(), names.end(), "capture") - names.begin());
     }
-    for (const DemoProcess& p : plan.pipeline) {
+    for (const ProgramSpec& p : plan.pipeline) {
       if (p.name == "lcm-logger") {
         EXPECT_TRUE(Has(p.argv, "--lcm-url=" + settings.lcm_url));
         EXPECT_EQ(p.argv.back(), plan.log.string());
@@ -183,7 +183,7 @@ TEST(DemoPlanTest, PlantModeServesThePlantSensesQAndLogsNoImages) {
   settings.shape_config = "/cfg/shape_service_plant.yaml";
   settings.log_channels = kControlChannels;
   const DemoPlan plan = MakeDemoPlan(settings);
-  for (const DemoProcess& p : plan.pipeline) {
+  for (const ProgramSpec& p : plan.pipeline) {
     if (p.name == "rig-sim") {
       EXPECT_EQ(ValueOf(p.argv, "--plant"), settings.plant_config);
     } else if (p.name == "shape") {
@@ -194,9 +194,9 @@ TEST(DemoPlanTest, PlantModeServesThePlantSensesQAndLogsNoImages) {
       EXPECT_TRUE(Has(p.argv, std::string("--channel=") + kControlChannels));
     }
   }
-  for (const DemoProcess& p : plan.background) EXPECT_FALSE(Has(p.argv, "--plant")) << p.name;
+  for (const ProgramSpec& p : plan.background) EXPECT_FALSE(Has(p.argv, "--plant")) << p.name;
   EXPECT_TRUE(plan.image_logs.empty()) << "no image logger when the channels are picked";
-  for (const DemoProcess& p : plan.pipeline) EXPECT_NE(p.name.rfind("lcm-logger-", 0), 0u);
+  for (const ProgramSpec& p : plan.pipeline) EXPECT_NE(p.name.rfind("lcm-logger-", 0), 0u);
   const std::regex logged(kControlChannels);
   for (const char* channel :
        {"SHAPESENSE_SHAPE", "SHAPESENSE_TRUTH", "SHAPESENSE_TARGET", "SHAPESENSE_TENDON_COMMAND",
@@ -207,7 +207,7 @@ TEST(DemoPlanTest, PlantModeServesThePlantSensesQAndLogsNoImages) {
        {"SHAPESENSE_IMAGE_cam0", "SHAPESENSE_VOXELS", "SHAPESENSE_SILHOUETTE_cam0"}) {
     EXPECT_FALSE(std::regex_match(channel, logged)) << channel;
   }
-  const DemoProcess run = ControllerRun(settings, "/cfg/controller_client.yaml", "closed_loop",
+  const ProgramSpec run = ControllerRun(settings, "/cfg/controller_client.yaml", "closed_loop",
                                         settings.out / "closed_loop");
   EXPECT_EQ(ValueOf(run.argv, "--mode"), "closed_loop");
   EXPECT_EQ(ValueOf(run.argv, "--targets"), "stream");
@@ -225,7 +225,7 @@ TEST(DemoPlanTest, SimulatedCamerasNeedNoRigSimAndTheirConfigIsValid) {
     const DemoSettings settings = RandomSettings(random, DemoCameras::kSimulated);
     const DemoPlan plan = MakeDemoPlan(settings);
     for (const auto* list : {&plan.background, &plan.pipeline}) {
-      for (const DemoProcess& p : *list) EXPECT_EQ(p.name.find("rig-sim"), std::string::npos);
+      for (const ProgramSpec& p : *list) EXPECT_EQ(p.name.find("rig-sim"), std::string::npos);
     }
     EXPECT_EQ(ValueOf(Find(plan.pipeline, "capture").argv, "--config"),
               plan.capture_config.string());
@@ -253,6 +253,19 @@ TEST(DemoPlanTest, OutputsStayInTheOutputFolder) {
     const std::string relative = fs::relative(path, settings.out).string();
     EXPECT_FALSE(relative.starts_with("..")) << path;
   }
+}
+
+TEST(MissingProgramsTest, NamesEveryMissingProgramWithWhatToDo) {
+  DemoPlan plan;
+  plan.background.push_back({"a", {"/bin/sh"}, "", "", true});
+  plan.pipeline.push_back({"b", {"/nonexistent/bin/shapesense-carving"}, "", "", false});
+  plan.pipeline.push_back({"c", {"/nonexistent/lcm-logger"}, "", "", false});
+  plan.pipeline.push_back({"d", {"/nonexistent/bin/shapesense-carving"}, "", "", false});
+  const std::vector<std::string> missing = MissingPrograms(plan);
+  ASSERT_EQ(missing.size(), 2u);
+  EXPECT_NE(missing[0].find("shapesense-carving is missing; build it"), std::string::npos);
+  EXPECT_NE(missing[1].find("lcm-logger is missing; install it: apt-get install liblcm-bin"),
+            std::string::npos);
 }
 
 }  // namespace

@@ -122,7 +122,7 @@ TEST_F(LiveDemoTest, AFailingProgramIsNamedWithItsOutputAndEverythingStops) {
   try {
     RunLiveDemo(args, stop_, log);
     FAIL() << "the demo ran without its carving service";
-  } catch (const DemoFailure& e) {
+  } catch (const ProgramFailure& e) {
     EXPECT_EQ(e.program(), "carving");
     EXPECT_NE(std::string(e.what()).find("exited with status 2"), std::string::npos) << e.what();
     EXPECT_NE(std::string(e.what()).find("expected 3 cameras"), std::string::npos) << e.what();
@@ -145,7 +145,7 @@ TEST_F(LiveDemoTest, MissingProgramsAreNamedBeforeAnythingStarts) {
   try {
     RunLiveDemo(args, stop_, log);
     FAIL() << "the demo ran without its programs";
-  } catch (const DemoFailure& e) {
+  } catch (const ProgramFailure& e) {
     for (const char* name :
          {"shapesense-rig-sim", "shapesense-capture", "shapesense-carving", "shapesense-shape"}) {
       EXPECT_NE(std::string(e.what()).find(name), std::string::npos) << e.what();

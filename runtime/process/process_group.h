@@ -1,8 +1,10 @@
 #pragma once
 
-// The live demo's programs while they run: each started with its output
-// (stdout and stderr) kept in <logs>/<name>.log, waited for until it is up,
-// watched for an early end, and stopped in order.
+// A group of programs run together on one machine (the live demo, the
+// closed-loop experiment, the end-to-end tests): each started with its
+// output (stdout and stderr) kept in <logs>/<name>.log, waited for until it
+// is up, watched for an early end, and stopped in order. A rig's hosts run
+// their programs under systemd instead (deploy/).
 #include <atomic>
 #include <chrono>
 #include <filesystem>
@@ -12,16 +14,33 @@
 #include <string>
 #include <vector>
 
-#include "clients/tools/demo/demo_plan.h"
 #include "runtime/process/child_process.h"
 
 namespace shapesense {
 
-// A program of the demo failed: it could not start, ended early, or never
+// One program of a group.
+struct ProgramSpec {
+  std::string name;  // short, for messages and its log file: "rig-sim", "capture", ...
+  std::vector<std::string> argv;
+  // It is up once its output has a line containing `ready_line`, or once its
+  // service status has arrived on LCM (`ready_status`, the service's name);
+  // neither: once started.
+  std::string ready_line;
+  std::string ready_status;
+  // It runs to its end (a one-off job) instead of until the group stops it.
+  bool runs_to_end = false;
+  // Its nice value (0: the launcher's). The demo raises the virtual rig's
+  // cameras and the capture service's triggers, which stand for hardware and
+  // a real-time process, where allowed (as root), so that another load on
+  // the machine delays the measuring, not the exposures.
+  int nice = 0;
+};
+
+// A program of the group failed: it could not start, ended early, or never
 // came up. The message names it and shows its last output.
-class DemoFailure : public std::runtime_error {
+class ProgramFailure : public std::runtime_error {
  public:
-  DemoFailure(std::string program, const std::string& message)
+  ProgramFailure(std::string program, const std::string& message)
       : std::runtime_error(message), program_(std::move(program)) {}
   const std::string& program() const { return program_; }
 
@@ -40,11 +59,7 @@ struct ProgramEnd {
 // `name` on $PATH; empty when it is not there.
 std::filesystem::path FindOnPath(const std::string& name);
 
-// The programs of `plan` that are missing or not executable, each with what
-// to do about it; empty when all are there.
-std::vector<std::string> MissingPrograms(const DemoPlan& plan);
-
-class DemoProcesses {
+class ProcessGroup {
  public:
   // `pump(ms)`: lets the caller's LCM bus work for up to `ms` while waiting;
   // `status_seen(service)`: whether that service's status has arrived.
@@ -53,21 +68,21 @@ class DemoProcesses {
     std::function<bool(const std::string& service)> status_seen;
   };
 
-  DemoProcesses(std::filesystem::path logs_dir, const std::atomic<bool>& stop, Hooks hooks);
-  ~DemoProcesses();  // stops whatever still runs
-  DemoProcesses(const DemoProcesses&) = delete;
-  DemoProcesses& operator=(const DemoProcesses&) = delete;
+  ProcessGroup(std::filesystem::path logs_dir, const std::atomic<bool>& stop, Hooks hooks);
+  ~ProcessGroup();  // stops whatever still runs
+  ProcessGroup(const ProcessGroup&) = delete;
+  ProcessGroup& operator=(const ProcessGroup&) = delete;
 
   // Starts `process` and waits until it is up, or for a one-off job until it
-  // has ended well. False when `stop` was set meanwhile. Throws DemoFailure.
-  bool Start(const DemoProcess& process, std::chrono::seconds timeout);
+  // has ended well. False when `stop` was set meanwhile. Throws ProgramFailure.
+  bool Start(const ProgramSpec& process, std::chrono::seconds timeout);
   // Starts `process` without waiting; then WaitUntilUp(name) (several
   // programs can start side by side).
-  void Launch(const DemoProcess& process);
+  void Launch(const ProgramSpec& process);
   bool WaitUntilUp(const std::string& name, std::chrono::seconds timeout);
   // Reads every program's output (a program whose pipe fills up blocks).
   void ReadOutput();
-  // Throws DemoFailure when a program has ended that should still run.
+  // Throws ProgramFailure when a program has ended that should still run.
   void CheckRunning();
   // Stops one program (SIGTERM, SIGKILL after a grace period); stopping
   // one that already ended only records how it ended.
@@ -83,13 +98,13 @@ class DemoProcesses {
 
  private:
   struct Running {
-    DemoProcess process;
+    ProgramSpec process;
     std::unique_ptr<ChildProcess> child;
   };
 
   Running& Find(const std::string& name);
   bool IsUp(Running& running);
-  DemoFailure Failure(const Running& running, const std::string& what) const;
+  ProgramFailure Failure(const Running& running, const std::string& what) const;
 
   std::filesystem::path logs_dir_;
   const std::atomic<bool>& stop_;

@@ -1,4 +1,4 @@
-#include "clients/tools/demo/demo_processes.h"
+#include "runtime/process/process_group.h"
 
 #include <unistd.h>
 
@@ -22,21 +22,6 @@ std::string Indented(const std::string& text) {
   return out;
 }
 
-std::string WhatToDo(const fs::path& program) {
-  if (program.filename().string().starts_with("shapesense")) {
-    return "build it: bash deploy/build.sh release (or ninja -C <build> " +
-           program.filename().string() + ")";
-  }
-  return "install it: apt-get install liblcm-bin";
-}
-
-std::vector<const DemoProcess*> AllProcesses(const DemoPlan& plan) {
-  std::vector<const DemoProcess*> all;
-  for (const DemoProcess& process : plan.background) all.push_back(&process);
-  for (const DemoProcess& process : plan.pipeline) all.push_back(&process);
-  return all;
-}
-
 }  // namespace
 
 fs::path FindOnPath(const std::string& name) {
@@ -51,27 +36,14 @@ fs::path FindOnPath(const std::string& name) {
   return {};
 }
 
-std::vector<std::string> MissingPrograms(const DemoPlan& plan) {
-  std::vector<std::string> missing;
-  for (const DemoProcess* process : AllProcesses(plan)) {
-    const fs::path program = process->argv.front();
-    const std::string line = program.string() + " is missing; " + WhatToDo(program);
-    if (access(program.c_str(), X_OK) != 0 &&
-        std::find(missing.begin(), missing.end(), line) == missing.end()) {
-      missing.push_back(line);
-    }
-  }
-  return missing;
-}
-
-DemoProcesses::DemoProcesses(fs::path logs_dir, const std::atomic<bool>& stop, Hooks hooks)
+ProcessGroup::ProcessGroup(fs::path logs_dir, const std::atomic<bool>& stop, Hooks hooks)
     : logs_dir_(std::move(logs_dir)), stop_(stop), hooks_(std::move(hooks)) {
   fs::create_directories(logs_dir_);
 }
 
-DemoProcesses::~DemoProcesses() { StopAll(); }
+ProcessGroup::~ProcessGroup() { StopAll(); }
 
-void DemoProcesses::Launch(const DemoProcess& process) {
+void ProcessGroup::Launch(const ProgramSpec& process) {
   ChildOptions options;
   options.capture_stderr = true;
   options.log_file = logs_dir_ / (process.name + ".log");
@@ -82,23 +54,23 @@ void DemoProcesses::Launch(const DemoProcess& process) {
   try {
     running_.push_back({process, std::make_unique<ChildProcess>(process.argv, options)});
   } catch (const std::runtime_error& e) {
-    throw DemoFailure(process.name, e.what());
+    throw ProgramFailure(process.name, e.what());
   }
 }
 
-bool DemoProcesses::Start(const DemoProcess& process, std::chrono::seconds timeout) {
+bool ProcessGroup::Start(const ProgramSpec& process, std::chrono::seconds timeout) {
   Launch(process);
   return WaitUntilUp(process.name, timeout);
 }
 
-DemoProcesses::Running& DemoProcesses::Find(const std::string& name) {
+ProcessGroup::Running& ProcessGroup::Find(const std::string& name) {
   const auto found = std::find_if(running_.begin(), running_.end(),
                                   [&](const Running& r) { return r.process.name == name; });
-  if (found == running_.end()) throw std::logic_error("DemoProcesses: no program " + name);
+  if (found == running_.end()) throw std::logic_error("ProcessGroup: no program " + name);
   return *found;
 }
 
-bool DemoProcesses::WaitUntilUp(const std::string& name, std::chrono::seconds timeout) {
+bool ProcessGroup::WaitUntilUp(const std::string& name, std::chrono::seconds timeout) {
   const auto deadline = std::chrono::steady_clock::now() + timeout;
   while (!IsUp(Find(name))) {
     if (stop_) return false;
@@ -113,9 +85,9 @@ bool DemoProcesses::WaitUntilUp(const std::string& name, std::chrono::seconds ti
 }
 
 // Up: its ready line or status seen; a one-off job: ended with status 0.
-bool DemoProcesses::IsUp(Running& running) {
+bool ProcessGroup::IsUp(Running& running) {
   ChildProcess& child = *running.child;
-  const DemoProcess& process = running.process;
+  const ProgramSpec& process = running.process;
   child.ReadAvailable();
   const std::optional<int> status = child.ExitStatus();
   if (process.runs_to_end && status && *status == 0) return true;
@@ -129,11 +101,11 @@ bool DemoProcesses::IsUp(Running& running) {
   return !process.runs_to_end;
 }
 
-void DemoProcesses::ReadOutput() {
+void ProcessGroup::ReadOutput() {
   for (Running& running : running_) running.child->ReadAvailable();
 }
 
-void DemoProcesses::CheckRunning() {
+void ProcessGroup::CheckRunning() {
   for (Running& running : running_) {
     running.child->ReadAvailable();
     if (const std::optional<int> status = running.child->ExitStatus()) {
@@ -142,7 +114,7 @@ void DemoProcesses::CheckRunning() {
   }
 }
 
-ProgramEnd DemoProcesses::Stop(const std::string& name) {
+ProgramEnd ProcessGroup::Stop(const std::string& name) {
   const auto found = std::find_if(running_.begin(), running_.end(),
                                   [&](const Running& r) { return r.process.name == name; });
   if (found == running_.end()) return {name, "was not running", false, {}};
@@ -153,24 +125,22 @@ ProgramEnd DemoProcesses::Stop(const std::string& name) {
   return end;
 }
 
-void DemoProcesses::Signal(const std::string& name, int signal) {
-  Find(name).child->Signal(signal);
-}
+void ProcessGroup::Signal(const std::string& name, int signal) { Find(name).child->Signal(signal); }
 
-bool DemoProcesses::IsRunning(const std::string& name) {
+bool ProcessGroup::IsRunning(const std::string& name) {
   const auto found = std::find_if(running_.begin(), running_.end(),
                                   [&](const Running& r) { return r.process.name == name; });
   return found != running_.end() && !found->child->ExitStatus().has_value();
 }
 
-void DemoProcesses::StopAll() {
+void ProcessGroup::StopAll() {
   while (!running_.empty()) Stop(running_.back().process.name);
 }
 
-DemoFailure DemoProcesses::Failure(const Running& running, const std::string& what) const {
+ProgramFailure ProcessGroup::Failure(const Running& running, const std::string& what) const {
   const std::string tail = running.child->Tail(kTailLines);
   const fs::path log = logs_dir_ / (running.process.name + ".log");
-  return DemoFailure(
+  return ProgramFailure(
       running.process.name,
       running.process.name + " (" + running.process.argv.front() + ") " + what +
           (tail.empty() ? "; it printed nothing" : "; its last output:\n" + Indented(tail)) +

@@ -1,8 +1,8 @@
-// Running the demo's programs (stand-ins written in sh): up when their line
+// Running a group of programs (stand-ins written in sh): up when their line
 // or status shows, one-off jobs waited for, every failure named with the
 // program's last output, Ctrl-C honoured while waiting, and the programs
 // stopped last-started-first.
-#include "clients/tools/demo/demo_processes.h"
+#include "runtime/process/process_group.h"
 
 #include <gtest/gtest.h>
 
@@ -15,37 +15,37 @@ namespace {
 namespace fs = std::filesystem;
 using std::chrono::seconds;
 
-// Runs until SIGTERM, then ends well, as the demo's programs do.
+// Runs until SIGTERM, then ends well, as the services do.
 constexpr const char* kEndsOnTerm = "trap 'exit 0' TERM; echo up; while :; do sleep 0.05; done";
 
-DemoProcess Sh(const std::string& name, const std::string& script) {
+ProgramSpec Sh(const std::string& name, const std::string& script) {
   return {name, {"/bin/sh", "-c", script}, "", "", false};
 }
 
 // Up once its trap is set.
-DemoProcess EndsOnTerm(const std::string& name) {
-  DemoProcess process = Sh(name, kEndsOnTerm);
+ProgramSpec EndsOnTerm(const std::string& name) {
+  ProgramSpec process = Sh(name, kEndsOnTerm);
   process.ready_line = "up";
   return process;
 }
 
-class DemoProcessesTest : public ::testing::Test {
+class ProcessGroupTest : public ::testing::Test {
  protected:
   void SetUp() override {
-    logs_ = fs::path(::testing::TempDir()) / ("demo_processes_test_" + std::to_string(getpid()));
+    logs_ = fs::path(::testing::TempDir()) / ("process_group_test_" + std::to_string(getpid()));
     fs::remove_all(logs_);
   }
   void TearDown() override { fs::remove_all(logs_); }
 
-  DemoProcesses::Hooks Hooks() {
+  ProcessGroup::Hooks Hooks() {
     return {[](int) {}, [this](const std::string& s) { return statuses_.contains(s); }};
   }
 
-  // The message of the DemoFailure `start` throws ("" when none).
+  // The message of the ProgramFailure `start` throws ("" when none).
   static std::string FailureOf(const std::function<void()>& start) {
     try {
       start();
-    } catch (const DemoFailure& e) {
+    } catch (const ProgramFailure& e) {
       return e.what();
     }
     return "";
@@ -56,12 +56,12 @@ class DemoProcessesTest : public ::testing::Test {
   std::set<std::string> statuses_;
 };
 
-TEST_F(DemoProcessesTest, UpWhenItsLineOrStatusShows) {
-  DemoProcesses processes(logs_, stop_, Hooks());
-  DemoProcess lined = Sh("lined", "sleep 0.2; echo 'it is ready now'; exec sleep 30");
+TEST_F(ProcessGroupTest, UpWhenItsLineOrStatusShows) {
+  ProcessGroup processes(logs_, stop_, Hooks());
+  ProgramSpec lined = Sh("lined", "sleep 0.2; echo 'it is ready now'; exec sleep 30");
   lined.ready_line = "ready now";
   EXPECT_TRUE(processes.Start(lined, seconds(30)));
-  DemoProcess service = Sh("service", "exec sleep 30");
+  ProgramSpec service = Sh("service", "exec sleep 30");
   service.ready_status = "carving";
   statuses_.insert("carving");
   EXPECT_TRUE(processes.Start(service, seconds(30)));
@@ -69,9 +69,9 @@ TEST_F(DemoProcessesTest, UpWhenItsLineOrStatusShows) {
   EXPECT_TRUE(fs::exists(logs_ / "lined.log"));
 }
 
-TEST_F(DemoProcessesTest, AnEarlyEndIsNamedWithItsLastOutput) {
-  DemoProcesses processes(logs_, stop_, Hooks());
-  DemoProcess broken = Sh("carving", "echo 'rig.yaml: expected a rig' >&2; exit 2");
+TEST_F(ProcessGroupTest, AnEarlyEndIsNamedWithItsLastOutput) {
+  ProcessGroup processes(logs_, stop_, Hooks());
+  ProgramSpec broken = Sh("carving", "echo 'rig.yaml: expected a rig' >&2; exit 2");
   broken.ready_status = "carving";
   const std::string message = FailureOf([&] { processes.Start(broken, seconds(30)); });
   EXPECT_NE(message.find("carving"), std::string::npos) << message;
@@ -80,34 +80,34 @@ TEST_F(DemoProcessesTest, AnEarlyEndIsNamedWithItsLastOutput) {
   EXPECT_NE(message.find((logs_ / "carving.log").string()), std::string::npos) << message;
 }
 
-TEST_F(DemoProcessesTest, OneOffJobsAreWaitedForAndTheirFailureNamed) {
-  DemoProcesses processes(logs_, stop_, Hooks());
-  DemoProcess job = Sh("background", "sleep 0.2; echo written");
+TEST_F(ProcessGroupTest, OneOffJobsAreWaitedForAndTheirFailureNamed) {
+  ProcessGroup processes(logs_, stop_, Hooks());
+  ProgramSpec job = Sh("background", "sleep 0.2; echo written");
   job.runs_to_end = true;
   EXPECT_TRUE(processes.Start(job, seconds(30)));
   ASSERT_EQ(processes.ends().size(), 1u);
   EXPECT_TRUE(processes.ends()[0].clean);
-  DemoProcess failing = Sh("background2", "echo 'no frame for 5 s' >&2; exit 1");
+  ProgramSpec failing = Sh("background2", "echo 'no frame for 5 s' >&2; exit 1");
   failing.runs_to_end = true;
   const std::string message = FailureOf([&] { processes.Start(failing, seconds(30)); });
   EXPECT_NE(message.find("no frame for 5 s"), std::string::npos) << message;
 }
 
-TEST_F(DemoProcessesTest, NeverUpIsAFailureAndStopEndsTheWait) {
-  DemoProcesses processes(logs_, stop_, Hooks());
-  DemoProcess silent = Sh("silent", "exec sleep 30");
+TEST_F(ProcessGroupTest, NeverUpIsAFailureAndStopEndsTheWait) {
+  ProcessGroup processes(logs_, stop_, Hooks());
+  ProgramSpec silent = Sh("silent", "exec sleep 30");
   silent.ready_line = "ready";
   const std::string message = FailureOf([&] { processes.Start(silent, seconds(1)); });
   EXPECT_NE(message.find("did not come up"), std::string::npos) << message;
   EXPECT_NE(message.find("printed nothing"), std::string::npos) << message;
   stop_ = true;  // Ctrl-C while waiting
-  DemoProcess waiting = Sh("waiting", "exec sleep 30");
+  ProgramSpec waiting = Sh("waiting", "exec sleep 30");
   waiting.ready_line = "never";
   EXPECT_FALSE(processes.Start(waiting, seconds(30)));
 }
 
-TEST_F(DemoProcessesTest, AProgramThatEndsWhileRunningIsNamed) {
-  DemoProcesses processes(logs_, stop_, Hooks());
+TEST_F(ProcessGroupTest, AProgramThatEndsWhileRunningIsNamed) {
+  ProcessGroup processes(logs_, stop_, Hooks());
   EXPECT_TRUE(processes.Start(EndsOnTerm("steady"), seconds(30)));
   EXPECT_TRUE(processes.Start(Sh("crashing", "sleep 0.3; echo 'out of memory'; kill -SEGV $$"),
                               seconds(30)));
@@ -121,10 +121,10 @@ TEST_F(DemoProcessesTest, AProgramThatEndsWhileRunningIsNamed) {
   EXPECT_NE(message.find("out of memory"), std::string::npos) << message;
 }
 
-TEST_F(DemoProcessesTest, StoppedLastStartedFirst) {
+TEST_F(ProcessGroupTest, StoppedLastStartedFirst) {
   std::vector<std::string> names = {"rig-sim", "lcm-logger", "carving", "shape", "capture"};
   {
-    DemoProcesses processes(logs_, stop_, Hooks());
+    ProcessGroup processes(logs_, stop_, Hooks());
     for (const std::string& name : names) {
       ASSERT_TRUE(processes.Start(EndsOnTerm(name), seconds(30)));
     }
@@ -136,17 +136,7 @@ TEST_F(DemoProcessesTest, StoppedLastStartedFirst) {
   }
 }
 
-TEST(MissingProgramsTest, NamesEveryMissingProgramWithWhatToDo) {
-  DemoPlan plan;
-  plan.background.push_back({"a", {"/bin/sh"}, "", "", true});
-  plan.pipeline.push_back({"b", {"/nonexistent/bin/shapesense-carving"}, "", "", false});
-  plan.pipeline.push_back({"c", {"/nonexistent/lcm-logger"}, "", "", false});
-  plan.pipeline.push_back({"d", {"/nonexistent/bin/shapesense-carving"}, "", "", false});
-  const std::vector<std::string> missing = MissingPrograms(plan);
-  ASSERT_EQ(missing.size(), 2u);
-  EXPECT_NE(missing[0].find("shapesense-carving is missing; build it"), std::string::npos);
-  EXPECT_NE(missing[1].find("lcm-logger is missing; install it: apt-get install liblcm-bin"),
-            std::string::npos);
+TEST(FindOnPathTest, FindsWhatIsOnThePathOnly) {
   EXPECT_FALSE(FindOnPath("sh").empty());
   EXPECT_TRUE(FindOnPath("no-such-program-anywhere").empty());
 }
