@@ -1,4 +1,5 @@
 #include "clients/tools/demo_command.h"
+#include "runtime/process/signal_thread.h"
 
 #include <unistd.h>
 

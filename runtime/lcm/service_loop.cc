@@ -5,18 +5,9 @@
 
 #include <cerrno>
 #include <chrono>
-#include <csignal>
 #include <thread>
 
 namespace shapesense {
-namespace {
-
-std::atomic<bool> signalled{false};
-static_assert(std::atomic<bool>::is_always_lock_free, "the signal handler needs a lock-free flag");
-
-extern "C" void OnStopSignal(int) { signalled.store(true); }
-
-}  // namespace
 
 void RunBusLoop(LcmBus& bus, const std::atomic<bool>& stop, double duration_s,
                 const std::function<void(int64_t now_utime)>& poll) {
@@ -45,16 +36,6 @@ void RunBusLoop(const std::vector<LcmBus*>& buses, const std::atomic<bool>& stop
 void KeepFreedMemoryForReuse() {
   mallopt(M_MMAP_THRESHOLD, 32 << 20);
   mallopt(M_TRIM_THRESHOLD, 1 << 30);
-}
-
-const std::atomic<bool>& StopFlagOnSignals() {
-  static const bool installed = [] {
-    std::signal(SIGINT, OnStopSignal);
-    std::signal(SIGTERM, OnStopSignal);
-    return true;
-  }();
-  (void)installed;
-  return signalled;
 }
 
 }  // namespace shapesense

@@ -28,8 +28,4 @@ void RunBusLoop(const std::vector<LcmBus*>& buses, const std::atomic<bool>& stop
 // this halves the shape service's CPU per frame-set). Call first in main.
 void KeepFreedMemoryForReuse();
 
-// A flag that SIGINT and SIGTERM set (installs the handlers on first use);
-// a service's main passes it as `stop`.
-const std::atomic<bool>& StopFlagOnSignals();
-
 }  // namespace shapesense

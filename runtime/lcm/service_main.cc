@@ -1,4 +1,5 @@
 #include "runtime/lcm/service_main.h"
+#include "runtime/process/signal_thread.h"
 
 #include <CLI/CLI.hpp>
 #include <iostream>

@@ -5,6 +5,24 @@
 #include <ctime>
 
 namespace shapesense {
+namespace {
+
+std::atomic<bool> signalled{false};
+static_assert(std::atomic<bool>::is_always_lock_free, "the signal handler needs a lock-free flag");
+
+extern "C" void OnStopSignal(int) { signalled.store(true); }
+
+}  // namespace
+
+const std::atomic<bool>& StopFlagOnSignals() {
+  static const bool installed = [] {
+    std::signal(SIGINT, OnStopSignal);
+    std::signal(SIGTERM, OnStopSignal);
+    return true;
+  }();
+  (void)installed;
+  return signalled;
+}
 
 SignalThread::SignalThread(std::initializer_list<int> signals, std::function<void(int)> on_signal)
     : on_signal_(std::move(on_signal)) {

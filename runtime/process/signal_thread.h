@@ -1,8 +1,16 @@
 #pragma once
 
-// Signals taken on a thread of their own instead of in a handler: the
-// handler's code runs as ordinary code (no async-signal-safety rules, no
-// globals for it to reach), and a program's state stays in its main.
+// How the programs take signals. Two ways, for two needs:
+//  - StopFlagOnSignals: SIGINT and SIGTERM set one lock-free flag, the only
+//    thing a handler may safely do. For programs whose one signal is
+//    "stop" (the services, the demo); callable at any time, also after
+//    threads exist (LCM starts its reader thread in its constructor).
+//  - SignalThread: signals taken on a thread of their own instead of in a
+//    handler, so that their code runs as ordinary code (no async-signal-
+//    safety rules, no globals for it to reach) and a program's state stays
+//    in its main. For programs that take signals as commands (the rig-sim's
+//    SIGUSR1/SIGUSR2 faults); it must be built first in main, before any
+//    thread, so that every thread inherits the blocked signals.
 #include <atomic>
 #include <csignal>
 #include <functional>
@@ -10,6 +18,10 @@
 #include <thread>
 
 namespace shapesense {
+
+// A flag that SIGINT and SIGTERM set (installs the handlers on first use);
+// a service's main passes it as `stop`.
+const std::atomic<bool>& StopFlagOnSignals();
 
 class SignalThread {
  public:

@@ -8,6 +8,7 @@
 #include "libs/core/error.h"
 #include "runtime/command_line.h"
 #include "runtime/lcm/service_loop.h"
+#include "runtime/process/signal_thread.h"
 #include "services/capture/background_capture.h"
 #include "services/capture/capture_service.h"
 

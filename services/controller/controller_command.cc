@@ -1,4 +1,5 @@
 #include "services/controller/controller_command.h"
+#include "runtime/process/signal_thread.h"
 
 #include <CLI/CLI.hpp>
 #include <cstdio>
