@@ -27,7 +27,7 @@ constexpr uint32_t kHoldReasons = kGateInvalidProposal | kGateEmergencyStop | kG
 
 // Keeps the newest `capacity`; true when the oldest had to go.
 template <class T>
-bool PushBounded(std::deque<T>& queue, T&& item, size_t capacity) {
+bool PushBounded(std::deque<T>& queue, T item, size_t capacity) {
   const bool full = queue.size() >= capacity;
   if (full) queue.pop_front();
   queue.push_back(std::move(item));

@@ -67,11 +67,11 @@ std::string SerialActuatorOptions::Validate() const {
 
 std::string CanOpenOptions::Validate() const {
   if (interface.empty()) return Expected("interface", "a CAN interface name", "''");
-  if (const std::string error = ValidateNodeIds(node_ids); !error.empty()) return error;
+  if (std::string error = ValidateNodeIds(node_ids); !error.empty()) return error;
   if (!std::isfinite(counts_per_mm) || std::abs(counts_per_mm) < 1e-6) {
     return Expected("counts_per_mm", "a non-zero number", counts_per_mm);
   }
-  if (const std::string error = ValidateProfile(*this); !error.empty()) return error;
+  if (std::string error = ValidateProfile(*this); !error.empty()) return error;
   if (!InRange(heartbeat_period_s, 0.01, 10.0)) {
     return Expected("heartbeat_period_s", "0.01-10 s", heartbeat_period_s);
   }

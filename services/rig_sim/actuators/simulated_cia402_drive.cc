@@ -257,7 +257,9 @@ uint32_t SimulatedCia402Drive::CheckPdoConfigWriteLocked(uint16_t index, uint8_t
   if (subindex == 0) {
     if (value > 8) return canopen::sdo_abort::kPdoTooLong;
     uint32_t bits = 0;
-    for (uint8_t sub = 1; sub <= value; ++sub) bits += od_.Get(index, sub) & 0xFF;
+    for (uint32_t sub = 1; sub <= value; ++sub) {
+      bits += od_.Get(index, static_cast<uint8_t>(sub)) & 0xFF;
+    }
     return bits > 64 ? canopen::sdo_abort::kPdoTooLong : 0;
   }
   if (od_.Get(index, 0) != 0) return canopen::sdo_abort::kDeviceState;

@@ -27,7 +27,7 @@ class LimitAuditTest : public ::testing::Test {
 
   // Well inside the envelope: every tension 1 N above the minimum, bending nothing.
   Eigen::VectorXd Base() const {
-    const Eigen::VectorXd base =
+    Eigen::VectorXd base =
         envelope_.WithLeastTension(envelope_.RestingCommand(), limits_.min_tension + 1.0);
     EXPECT_EQ(envelope_.Check(base), "");
     return base;
@@ -37,7 +37,7 @@ class LimitAuditTest : public ::testing::Test {
   // (raises every tension, bends nothing): the rate is the only limit in play.
   Eigen::VectorXd Stepped(const Eigen::VectorXd& from, double step) const {
     const Eigen::VectorXd& direction = envelope_.pretension_displacements();
-    const Eigen::VectorXd to = from + direction * (step / direction.cwiseAbs().maxCoeff());
+    Eigen::VectorXd to = from + direction * (step / direction.cwiseAbs().maxCoeff());
     EXPECT_EQ(envelope_.Check(to), "");
     return to;
   }

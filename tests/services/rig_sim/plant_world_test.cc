@@ -15,7 +15,6 @@
 #include <limits>
 #include <random>
 
-#include "services/controller/rig_plant_driver.h"
 #include "libs/config/options_yaml.h"
 #include "libs/core/error.h"
 #include "libs/geometry/polyline.h"
@@ -24,6 +23,7 @@
 #include "runtime/file_io.h"
 #include "runtime/lcm/channels.h"
 #include "runtime/lcm/shape_message.h"
+#include "services/controller/rig_plant_driver.h"
 
 namespace shapesense {
 namespace {
@@ -74,7 +74,7 @@ double Farthest(const Polyline& points, const Polyline& from) {
 }
 
 fs::path WriteTemp(const std::string& name, const std::string& text) {
-  const fs::path path = fs::temp_directory_path() / ("plant_world_test_" + name);
+  fs::path path = fs::temp_directory_path() / ("plant_world_test_" + name);
   std::ofstream(path) << text;
   return path;
 }
@@ -376,7 +376,7 @@ class PlantLinkTest : public ::testing::Test {
   }
   // `seconds` of 1 ms polls, every message handled.
   void Run(PlantLink& link, double seconds) {
-    for (int i = 0; i < static_cast<int>(seconds * 1000.0 + 0.5); ++i) {
+    for (int i = 0; i < static_cast<int>(std::lround(seconds * 1000.0)); ++i) {
       HandleAll();
       last_poll_ = link.Poll(now_);
       rejections_.insert(rejections_.end(), last_poll_.rejections.begin(),

@@ -45,7 +45,7 @@ CanOpenOptions TestOptions(const std::vector<int>& ids) {
 // Drives on one in-memory bus and a master for them.
 class CanRig {
  public:
-  explicit CanRig(std::vector<int> ids, CanOpenOptions options = {},
+  explicit CanRig(const std::vector<int>& ids, CanOpenOptions options = {},
                   SimulatedDriveOptions drive = {}, bool power_on = true) {
     if (options.interface != "memory") options = TestOptions(ids);
     std::mt19937 rng(ids.size());
@@ -68,7 +68,7 @@ class CanRig {
   // Status() until it is not ok, bounded.
   ActuatorStatus AwaitTrouble() {
     for (int i = 0; i < 1000; ++i) {
-      const ActuatorStatus status = driver_->Status();
+      ActuatorStatus status = driver_->Status();
       if (!status.ok()) return status;
       std::this_thread::sleep_for(std::chrono::milliseconds(5));
     }

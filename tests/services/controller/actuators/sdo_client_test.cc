@@ -70,7 +70,13 @@ TEST_F(SdoClientTest, ValuesRoundTripThroughTheDrive) {
 }
 
 TEST_F(SdoClientTest, AbortCodesComeBackWithTheirMeaning) {
-  using namespace canopen::sdo_abort;
+  using canopen::sdo_abort::kDeviceState;
+  using canopen::sdo_abort::kInvalidValue;
+  using canopen::sdo_abort::kLengthMismatch;
+  using canopen::sdo_abort::kNoObject;
+  using canopen::sdo_abort::kNoSubindex;
+  using canopen::sdo_abort::kReadOnly;
+  using canopen::sdo_abort::kValueTooHigh;
   EXPECT_EQ(AbortOf([&] { sdo_.Upload(3, 0x2000, 0); },
                     "node 3: SDO read 2000:00 aborted: 0x06020000 (object does not exist in the "
                     "object dictionary)"),
@@ -98,7 +104,8 @@ TEST_F(SdoClientTest, AbortCodesComeBackWithTheirMeaning) {
 }
 
 TEST_F(SdoClientTest, PdoMappingFollowsCia301sOrder) {
-  using namespace canopen::sdo_abort;
+  using canopen::sdo_abort::kDeviceState;
+  using canopen::sdo_abort::kNotMappable;
   const uint32_t cob_id = canopen::kTpdo1Base + 3;
   sdo_.Download(3, 0x1800, 1, canopen::kPdoInvalid | cob_id, 4);
   EXPECT_EQ(AbortOf([&] { sdo_.Download(3, 0x1A00, 1, 0x60640020, 4); }, "device state"),

@@ -100,6 +100,7 @@ std::vector<double> AwaitPositions(ActuatorDriver& driver, const std::vector<dou
 std::vector<double> RandomTargets(std::mt19937& rng, int axes) {
   std::uniform_real_distribution<double> mm(-20.0, 20.0);
   std::vector<double> targets;
+  targets.reserve(static_cast<size_t>(axes));
   for (int i = 0; i < axes; ++i) {
     targets.push_back(std::stod(serial_protocol::FormatMm(mm(rng))));  // what the line carries
   }

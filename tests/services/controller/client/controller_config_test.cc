@@ -27,7 +27,7 @@ void Write(const fs::path& path, const std::string& text) { std::ofstream(path) 
 
 // A client config in `dir` naming the shipped files by absolute path, with `extra` appended.
 fs::path ClientConfig(const fs::path& dir, const std::string& extra) {
-  const fs::path path = dir / "client.yaml";
+  fs::path path = dir / "client.yaml";
   Write(path, "controller: " + (kConfigDir / "controller.yaml").string() +
                   "\nactuators: " + (kConfigDir / "actuators.yaml").string() +
                   "\nmanipulator: " + (kConfigDir / "manipulator.yaml").string() + "\n" + extra);
@@ -118,6 +118,7 @@ TEST(ControllerConfigTest, NothingIsOpenedBeforeEverythingIsChecked) {
   const std::string config_arg = config.string();
   std::vector<std::string> args = {"shapesense-controller", "--config", config_arg};
   std::vector<char*> argv;
+  argv.reserve(args.size());
   for (std::string& arg : args) argv.push_back(arg.data());
   std::ostringstream captured;
   std::streambuf* saved = std::cerr.rdbuf(captured.rdbuf());

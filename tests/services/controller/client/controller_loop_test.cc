@@ -60,7 +60,7 @@ testing::LimitCheck ExpectLogsComplete(InProcessRig& rig) {
   const testing::ControllerCsv csv = testing::ReadControllerCsv(rig.setup().client.log.csv);
   EXPECT_EQ(csv.bad_rows, 0);
   EXPECT_EQ(static_cast<int64_t>(csv.rows.size()), rig.client().counters().steps);
-  const testing::LimitCheck check = testing::CheckLoggedCommands(
+  testing::LimitCheck check = testing::CheckLoggedCommands(
       csv, TendonModel(rig.setup().manipulator), rig.setup().controller.limits);
   EXPECT_EQ(check.total(), 0) << check.first;
   EXPECT_EQ(check.commands, static_cast<int>(csv.rows.size()));

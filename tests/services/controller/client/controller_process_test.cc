@@ -98,7 +98,7 @@ ChildOptions Options() {
 // Both logs complete: one row, one command and one state event per step,
 // every command within the limits. Returns the rows.
 testing::ControllerCsv ExpectLogsComplete(const RunFiles& run) {
-  const testing::ControllerCsv csv = testing::ReadControllerCsv(run.csv);
+  testing::ControllerCsv csv = testing::ReadControllerCsv(run.csv);
   EXPECT_EQ(csv.bad_rows, 0);
   EXPECT_GT(csv.rows.size(), 50u);
   const testing::LimitCheck check = testing::CheckLoggedCommands(

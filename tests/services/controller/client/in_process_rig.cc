@@ -38,8 +38,8 @@ Configuration ResolvedConfiguration(const ControllerSetup& setup, double kappa_x
 
 fs::path TestLogDir() {
   const ::testing::TestInfo* info = ::testing::UnitTest::GetInstance()->current_test_info();
-  const fs::path dir = fs::path(::testing::TempDir()) / "shapesense_controller" /
-                       (std::string(info->test_suite_name()) + "." + info->name());
+  fs::path dir = fs::path(::testing::TempDir()) / "shapesense_controller" /
+                 (std::string(info->test_suite_name()) + "." + info->name());
   fs::remove_all(dir);
   fs::create_directories(dir);
   return dir;

@@ -8,6 +8,7 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <random>
 
 #include "runtime/lcm/channels.h"
@@ -37,7 +38,7 @@ class RigPlantDriverTest : public ::testing::Test {
   }
   // `seconds` of 10 ms ticks of the plant, every message handled.
   void Run(double seconds) {
-    for (int i = 0; i < static_cast<int>(seconds * 100.0 + 0.5); ++i) {
+    for (int i = 0; i < static_cast<int>(std::lround(seconds * 100.0)); ++i) {
       now_ += 10'000;
       plant_.Tick();
       while (bus_.Handle(0) > 0) {
