@@ -15,6 +15,8 @@ double MillisecondsSince(Clock::time_point start) {
 
 }  // namespace
 
+namespace {
+
 void CheckBackgrounds(const Rig& rig, const std::vector<cv::Mat>& backgrounds) {
   if (backgrounds.size() != rig.cameras.size()) {
     throw InputError("expected one background per camera (" + std::to_string(rig.cameras.size()) +
@@ -30,6 +32,13 @@ void CheckBackgrounds(const Rig& rig, const std::vector<cv::Mat>& backgrounds) {
   }
 }
 
+}  // namespace
+
+SilhouetteStage::SilhouetteStage(const Rig& rig, std::vector<cv::Mat> backgrounds,
+                                 const SilhouetteOptions& options)
+    : backgrounds_((CheckBackgrounds(rig, backgrounds), std::move(backgrounds))),
+      extractor_(options) {}
+
 std::string PipelineOptions::Validate() const {
   for (const auto& [section, error] :
        {std::pair{"silhouette.", silhouette.Validate()}, std::pair{"carving.", carving.Validate()},
@@ -44,8 +53,7 @@ SensingPipeline::SensingPipeline(const Rig& rig, const PipelineOptions& options,
                                  const ProgressCallback& table_progress)
     : rig_(rig),
       options_(options),
-      backgrounds_((CheckBackgrounds(rig, backgrounds), std::move(backgrounds))),
-      extractor_(options.silhouette),
+      silhouettes_(rig, std::move(backgrounds), options.silhouette),
       carver_(rig, options.carving, table_progress),
       estimator_(rig, options.shape) {}
 
@@ -59,7 +67,7 @@ void SensingPipeline::Process(const std::vector<cv::Mat>& images, FrameResult* r
   result->silhouettes.resize(images.size());
   auto start = Clock::now();
   for (size_t i = 0; i < images.size(); ++i) {
-    extractor_.Extract(images[i], backgrounds_[i], &result->silhouettes[i]);
+    silhouettes_.Extract(i, images[i], &result->silhouettes[i]);
   }
   result->times.silhouette_ms = MillisecondsSince(start);
 

@@ -47,9 +47,25 @@ struct FrameResult {
   StageTimes times;
 };
 
-// Throws InputError unless there is one 8-bit BGR background per camera of
-// the rig, of its camera's size (every chain that extracts silhouettes).
-void CheckBackgrounds(const Rig& rig, const std::vector<cv::Mat>& backgrounds);
+// The first stage of every sensing chain (offline here, live in the carving
+// service, replay): each camera's image against its own background.
+class SilhouetteStage {
+ public:
+  // Throws InputError unless there is one 8-bit BGR background per camera
+  // of the rig, of its camera's size.
+  SilhouetteStage(const Rig& rig, std::vector<cv::Mat> backgrounds,
+                  const SilhouetteOptions& options);
+
+  // The silhouette in `image` (8-bit BGR of its size) of the rig's camera
+  // `camera` (< the number of cameras). Thread-safe.
+  void Extract(size_t camera, const cv::Mat& image, Silhouette* out) const {
+    extractor_.Extract(image, backgrounds_[camera], out);
+  }
+
+ private:
+  std::vector<cv::Mat> backgrounds_;
+  SilhouetteExtractor extractor_;
+};
 
 // Silhouettes → carving → shape for one rig, timing each stage. Owns the
 // lookup table, so build it once per rig.
@@ -69,8 +85,7 @@ class SensingPipeline {
  private:
   Rig rig_;
   PipelineOptions options_;
-  std::vector<cv::Mat> backgrounds_;
-  SilhouetteExtractor extractor_;
+  SilhouetteStage silhouettes_;
   Carver carver_;
   ShapeEstimator estimator_;
 };

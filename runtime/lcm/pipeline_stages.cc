@@ -14,7 +14,6 @@
 #include "runtime/lcm/silhouette_message.h"
 #include "runtime/lcm/stage_times.h"
 #include "runtime/lcm/voxel_cloud_message.h"
-#include "runtime/sensing_pipeline.h"
 
 namespace shapesense {
 namespace fs = std::filesystem;
@@ -111,8 +110,7 @@ CarvingStage::CarvingStage(const Rig& rig, std::vector<cv::Mat> backgrounds,
                            const SilhouetteOptions& silhouette, const CarvingOptions& carving,
                            const ProgressCallback& table_progress)
     : rig_(rig),
-      backgrounds_((CheckBackgrounds(rig, backgrounds), std::move(backgrounds))),
-      extractor_(silhouette),
+      silhouettes_(rig, std::move(backgrounds), silhouette),
       carver_(rig, carving, table_progress) {}
 
 std::string CarvingStage::PrepareView(size_t camera, const image_t& image, PreparedView* view,
@@ -135,7 +133,7 @@ std::string CarvingStage::PrepareView(size_t camera, const image_t& image,
     view->error = error;
     return error;
   }
-  extractor_.Extract(bgr, backgrounds_[camera], &view->silhouette);
+  silhouettes_.Extract(camera, bgr, &view->silhouette);
   Compact(view->silhouette, &view->compact, scratch);
   view->end_utime = NowUtime();
   return {};

@@ -21,6 +21,7 @@
 #include "runtime/config_file.h"
 #include "runtime/lcm/frame_set_assembler.h"
 #include "runtime/lcm/silhouette_message.h"
+#include "runtime/sensing_pipeline.h"
 #include "shapesense/shape_t.hpp"
 #include "shapesense/silhouettes_t.hpp"
 #include "shapesense/voxel_cloud_t.hpp"
@@ -121,8 +122,7 @@ class CarvingStage {
 
  private:
   Rig rig_;
-  std::vector<cv::Mat> backgrounds_;
-  SilhouetteExtractor extractor_;
+  SilhouetteStage silhouettes_;
   Carver carver_;
 };
 
