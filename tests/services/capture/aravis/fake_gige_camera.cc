@@ -1,4 +1,4 @@
-#include "tests/services/aravis/fake_gige_camera.h"
+#include "tests/services/capture/aravis/fake_gige_camera.h"
 
 #include <arv.h>
 

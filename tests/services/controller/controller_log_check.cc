@@ -1,4 +1,4 @@
-#include "tests/services/controller/client/controller_log_check.h"
+#include "tests/services/controller/controller_log_check.h"
 
 #include <algorithm>
 #include <cstdlib>

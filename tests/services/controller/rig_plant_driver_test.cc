@@ -14,8 +14,8 @@
 #include "runtime/lcm/channels.h"
 #include "runtime/lcm/wire_check.h"
 #include "shapesense/tendon_state_t.hpp"
-#include "tests/services/controller/client/fake_rig_plant.h"
-#include "tests/services/controller/client/in_process_rig.h"
+#include "tests/services/controller/fake_rig_plant.h"
+#include "tests/services/controller/in_process_rig.h"
 
 namespace shapesense {
 namespace {

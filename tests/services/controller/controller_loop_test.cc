@@ -20,8 +20,8 @@
 #include "runtime/lcm/channels.h"
 #include "shapesense/estop_t.hpp"
 #include "shapesense/tendon_command_t.hpp"
-#include "tests/services/controller/client/controller_log_check.h"
-#include "tests/services/controller/client/in_process_rig.h"
+#include "tests/services/controller/controller_log_check.h"
+#include "tests/services/controller/in_process_rig.h"
 
 namespace shapesense {
 namespace {

@@ -13,7 +13,7 @@
 
 #include "runtime/process/private_network.h"
 #include "services/capture/aravis_camera.h"
-#include "tests/services/aravis/fake_gige_camera.h"
+#include "tests/services/capture/aravis/fake_gige_camera.h"
 #include "tests/support/network_test.h"
 
 namespace shapesense {

@@ -12,7 +12,7 @@
 #include "libs/config/options_yaml.h"
 #include "libs/core/error.h"
 #include "services/controller/controller_command.h"
-#include "tests/services/controller/client/in_process_rig.h"
+#include "tests/services/controller/in_process_rig.h"
 
 namespace shapesense {
 namespace {

@@ -1,4 +1,4 @@
-#include "tests/services/controller/client/in_process_rig.h"
+#include "tests/services/controller/in_process_rig.h"
 
 #include <gtest/gtest.h>
 

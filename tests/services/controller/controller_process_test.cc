@@ -18,8 +18,8 @@
 #include "runtime/devices/device_clock.h"
 #include "runtime/lcm/channels.h"
 #include "runtime/process/child_process.h"
-#include "tests/services/controller/client/controller_log_check.h"
-#include "tests/services/controller/client/in_process_rig.h"
+#include "tests/services/controller/controller_log_check.h"
+#include "tests/services/controller/in_process_rig.h"
 #include "tests/support/network_test.h"
 
 namespace shapesense {

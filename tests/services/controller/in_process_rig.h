@@ -13,7 +13,7 @@
 
 #include "services/controller/controller_client.h"
 #include "services/controller/rig_plant_driver.h"
-#include "tests/services/controller/client/fake_rig_plant.h"
+#include "tests/services/controller/fake_rig_plant.h"
 
 namespace shapesense::testing {
 

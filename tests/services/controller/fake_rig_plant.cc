@@ -1,4 +1,4 @@
-#include "tests/services/controller/client/fake_rig_plant.h"
+#include "tests/services/controller/fake_rig_plant.h"
 
 #include <cmath>
 
