@@ -34,10 +34,11 @@ std::vector<uint8_t> PatternBytes(int64_t n, size_t size) {
 
 std::vector<uint8_t> RawBytesOf(const cv::Mat& image) {
   cv::Mat raw;
-  if (image.channels() == 3)
+  if (image.channels() == 3) {
     cv::cvtColor(image, raw, cv::COLOR_BGR2RGB);
-  else
+  } else {
     raw = image.clone();
+  }
   return std::vector<uint8_t>(raw.datastart, raw.dataend);
 }
 
