@@ -35,11 +35,15 @@ class LcmBus {
   template <class Message>
   void Subscribe(const std::string& channel,
                  std::function<void(Message&&, const std::string&, int64_t)> handler) {
-    auto subscription = std::make_unique<Typed<Message>>(this, std::move(handler));
-    // A plain function, not a member pointer: GCC 12's UBSan misreads LCM's
-    // member-pointer subscription path (a false "misaligned address").
-    lcm_.subscribeFunction(channel, &Typed<Message>::OnRawStatic, subscription.get());
-    subscriptions_.push_back(std::move(subscription));
+    SubscribeRaw(channel, [handler = std::move(handler)](std::span<const uint8_t> bytes,
+                                                         const std::string& channel_of,
+                                                         int64_t receive_utime) {
+      Message message;
+      // DecodeMessage checks the lengths before lcm-gen's decoder allocates by them.
+      std::string why = DecodeMessage(bytes.data(), bytes.size(), &message);
+      if (why.empty()) handler(std::move(message), channel_of, receive_utime);
+      return why;
+    });
   }
 
   // Handler gets the raw bytes (valid during the call only), the channel and
@@ -50,6 +54,8 @@ class LcmBus {
       std::function<std::string(std::span<const uint8_t>, const std::string&, int64_t)>;
   void SubscribeRaw(const std::string& channel, RawHandler handler) {
     auto subscription = std::make_unique<Raw>(this, std::move(handler));
+    // A plain function, not a member pointer: GCC 12's UBSan misreads LCM's
+    // member-pointer subscription path (a false "misaligned address").
     lcm_.subscribeFunction(channel, &Raw::OnRawStatic, subscription.get());
     subscriptions_.push_back(std::move(subscription));
   }
@@ -69,35 +75,6 @@ class LcmBus {
  private:
   struct SubscriptionBase {
     virtual ~SubscriptionBase() = default;
-  };
-
-  template <class Message>
-  struct Typed : SubscriptionBase {
-    Typed(LcmBus* bus, std::function<void(Message&&, const std::string&, int64_t)> handler)
-        : bus_(bus), handler_(std::move(handler)) {}
-
-    static void OnRawStatic(const lcm::ReceiveBuffer* buffer, const std::string& channel,
-                            Typed* self) {
-      self->OnRaw(buffer, channel);
-    }
-
-    void OnRaw(const lcm::ReceiveBuffer* buffer, const std::string& channel) {
-      Message message;
-      // DecodeMessage checks the lengths before lcm-gen's decoder allocates by them.
-      const std::string why = DecodeMessage(buffer->data, buffer->data_size, &message);
-      if (!why.empty()) {
-        bus_->Reject(channel, why);
-        return;
-      }
-      try {
-        handler_(std::move(message), channel, buffer->recv_utime);
-      } catch (...) {
-        ++bus_->handler_errors_;
-      }
-    }
-
-    LcmBus* bus_;
-    std::function<void(Message&&, const std::string&, int64_t)> handler_;
   };
 
   struct Raw : SubscriptionBase {

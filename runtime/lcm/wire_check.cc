@@ -82,36 +82,42 @@ int64_t WireFingerprint(const uint8_t* data, size_t size) {
   return static_cast<int64_t>(hash);
 }
 
-bool WireCheck<image_t>::Plausible(const uint8_t* data, size_t size) {
+namespace {
+
+// Where an image's pixel count lies (its pixels follow, to the end of the
+// buffer), or 0 when the buffer is not a plausible image_t.
+size_t ImagePixelCountAt(const uint8_t* data, size_t size) {
   WireWalker walk(data, size);
+  if (!walk.Skip(kHash + kHeader) || !walk.SkipString() || !walk.Skip(kImageFixed) ||
+      !walk.StageTimes()) {
+    return 0;
+  }
+  const size_t count_at = walk.position();
   int64_t bytes = 0;
-  return walk.Skip(kHash + kHeader) && walk.SkipString() && walk.Skip(kImageFixed) &&
-         walk.StageTimes() && walk.Count(&bytes) && walk.SkipArray(bytes, 1) && walk.AtEnd();
+  return walk.Count(&bytes) && walk.SkipArray(bytes, 1) && walk.AtEnd() ? count_at : 0;
+}
+
+}  // namespace
+
+bool WireCheck<image_t>::Plausible(const uint8_t* data, size_t size) {
+  return ImagePixelCountAt(data, size) > 0;
 }
 
 std::string DecodeImageFields(const void* data, size_t size, image_t* fields,
                               std::span<const uint8_t>* pixels) {
   const auto* bytes = static_cast<const uint8_t*>(data);
   if (WireFingerprint(bytes, size) != image_t::getHash()) return "not a valid image_t: wrong type";
-  if (size > static_cast<size_t>(INT_MAX) || !WireCheck<image_t>::Plausible(bytes, size)) {
-    return "not a valid image_t: lengths do not fit";
-  }
+  const size_t count_at = size > static_cast<size_t>(INT_MAX) ? 0 : ImagePixelCountAt(bytes, size);
+  if (count_at == 0) return "not a valid image_t: lengths do not fit";
+  const size_t count = size - count_at - 4;  // the pixels run to the end
   // Everything before the pixels, with a pixel count of 0, decodes as an
   // image without pixels: a few hundred bytes copied instead of the image.
-  WireWalker walk(bytes, size);
-  walk.Skip(kHash + kHeader);
-  walk.SkipString();
-  walk.Skip(kImageFixed);
-  walk.StageTimes();
-  const size_t count_at = walk.position();
-  int64_t count = 0;
-  walk.Count(&count);
   std::vector<uint8_t> head(bytes, bytes + count_at + 4);
   std::fill(head.end() - 4, head.end(), uint8_t{0});
   std::string why = DecodeMessage(head.data(), head.size(), fields);
   if (!why.empty()) return why;
   fields->size = static_cast<int32_t>(count);
-  *pixels = {bytes + count_at + 4, static_cast<size_t>(count)};
+  *pixels = {bytes + count_at + 4, count};
   return {};
 }
 

@@ -58,14 +58,14 @@ std::map<std::string, Target> ReadScopes() {
 std::set<std::string> Closure(const std::map<std::string, Target>& targets,
                               const std::string& name) {
   std::set<std::string> seen;
-  std::vector<std::string> todo = {name};
-  while (!todo.empty()) {
-    const std::string next = todo.back();
-    todo.pop_back();
+  std::vector<std::string> to_visit = {name};
+  while (!to_visit.empty()) {
+    const std::string next = to_visit.back();
+    to_visit.pop_back();
     if (!seen.insert(next).second) continue;
     const auto found = targets.find(next);
     if (found == targets.end()) continue;
-    for (const std::string& dep : found->second.deps) todo.push_back(dep);
+    for (const std::string& dep : found->second.deps) to_visit.push_back(dep);
   }
   return seen;
 }
