@@ -6,6 +6,8 @@
 #include <chrono>
 #include <cstdint>
 
+#include "runtime/host_clock.h"
+
 namespace shapesense {
 
 // Monotonic µs, for deadlines and durations.
@@ -15,12 +17,8 @@ inline int64_t SteadyMicros() {
       .count();
 }
 
-// µs since the epoch, for timestamps.
-inline int64_t EpochMicros() {
-  return std::chrono::duration_cast<std::chrono::microseconds>(
-             std::chrono::system_clock::now().time_since_epoch())
-      .count();
-}
+// µs since the epoch on this host's clock, for timestamps.
+inline int64_t EpochMicros() { return HostUtime(); }
 
 inline int64_t SecondsToMicros(double seconds) { return static_cast<int64_t>(seconds * 1e6); }
 

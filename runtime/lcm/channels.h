@@ -2,7 +2,10 @@
 
 // Every LCM channel of shapesense, in one place. A rig can run several
 // pipelines side by side on one LCM network by giving each a prefix
-// (e.g. "RIG2_"); the default prefix is empty.
+// (e.g. "RIG2_": the rig file's `prefix`, SHAPESENSE_RIG_PREFIX): LcmBus
+// adds it to every channel it publishes or subscribes to and takes it off
+// the channels its handlers see, so the names here never carry it. Which
+// network each channel takes: channel_networks.h.
 #include <string>
 
 namespace shapesense::channels {
@@ -15,6 +18,7 @@ inline constexpr const char* kImagePattern = "SHAPESENSE_IMAGE_.*";
 inline std::string Silhouette(const std::string& camera) {
   return "SHAPESENSE_SILHOUETTE_" + camera;
 }
+inline constexpr const char* kSilhouettePattern = "SHAPESENSE_SILHOUETTE_.*";
 // The silhouettes of each frame-set, compact (what the shape service refines
 // against): silhouettes_t, one datagram.
 inline constexpr const char* kSilhouettes = "SHAPESENSE_SILHOUETTES";

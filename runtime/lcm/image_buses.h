@@ -7,8 +7,8 @@
 // copies and reassembles every datagram sent to it, whatever the channel; so
 // with all channels on one port the shape service, the controller and every
 // monitor would pay for each image. Each camera's channel therefore gets its
-// own port, the rig's port + 1 + the camera's index in the rig (the group and
-// the options stay the rig's): only the capture service that publishes a
+// own port on the host-local network (lcm_bus.h), its port + 1 + the
+// camera's index in the rig (the group and the options stay the network's): only the capture service that publishes a
 // camera's images and the processes that use them (the carving service, a
 // logger of images) listen there. The kernel sorts datagrams to sockets by
 // port, so a process never sees another port's traffic. (A different group
@@ -33,8 +33,8 @@ std::string ImageUrl(const std::string& url, size_t camera_index);
 // Whether ImageUrl gives each camera a bus of its own on `url`.
 bool HasImageBuses(const std::string& url);
 
-// The image buses of a process on `main`: one per camera on a udpm rig,
-// `main` itself otherwise. Opening them is lazy: a process opens only the
+// The image buses of a process on `main`: one per camera on main's local
+// network when it is udpm, `main` itself otherwise. Opening them is lazy: a process opens only the
 // cameras it uses.
 class ImageBuses {
  public:

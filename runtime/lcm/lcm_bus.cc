@@ -1,22 +1,157 @@
 #include "runtime/lcm/lcm_bus.h"
 
-#include <chrono>
+#include <poll.h>
+
 #include <cstdlib>
 #include <stdexcept>
 
-namespace shapesense {
+#include "runtime/host_clock.h"
+#include "runtime/lcm/lcm_url.h"
 
-LcmBus::LcmBus(const std::string& url) : url_(ResolveLcmUrl(url)), lcm_(url_) {
-  if (!lcm_.good()) {
-    throw std::runtime_error(
-        "LCM could not start on '" + (url.empty() ? std::string("default") : url) +
-        "' (is there a multicast route? see docs/capture.md, section LCM on a rig)");
+namespace shapesense {
+namespace {
+
+std::string Environment(const char* name) {
+  const char* value = std::getenv(name);
+  return value != nullptr ? value : "";
+}
+
+void CheckPrefix(const std::string& prefix) {
+  for (const char c : prefix) {
+    const bool allowed =
+        (c >= 'A' && c <= 'Z') || (c >= 'a' && c <= 'z') || (c >= '0' && c <= '9') || c == '_';
+    if (!allowed) {
+      throw std::invalid_argument("rig prefix '" + prefix +
+                                  "': only letters, digits and '_' (it starts LCM channel "
+                                  "names and their regular expressions)");
+    }
   }
+}
+
+std::unique_ptr<lcm::LCM> StartLcm(const std::string& url, const std::string& given) {
+  auto instance = std::make_unique<lcm::LCM>(url);
+  if (!instance->good()) {
+    throw std::runtime_error("LCM could not start on '" +
+                             (given.empty() ? std::string("default") : url) +
+                             "' (is there a multicast route? see docs/rig.md, section Multicast)");
+  }
+  return instance;
+}
+
+// The rig network's URL kept on the host (one network when it is local already).
+std::string LocalUrlOf(const std::string& url) { return TtlOf(url) == 0 ? url : WithTtl(url, 0); }
+
+}  // namespace
+
+LcmBusOptions LcmBusOptions::FromEnvironment(const std::string& url) {
+  LcmBusOptions options;
+  options.url = url;
+  options.local_url = Environment("SHAPESENSE_LOCAL_LCM_URL");
+  options.prefix = Environment("SHAPESENSE_RIG_PREFIX");
+  try {
+    options.routes = ChannelNetworks::Parse(Environment("SHAPESENSE_CHANNEL_NETWORKS"));
+  } catch (const std::invalid_argument& error) {
+    throw std::invalid_argument(std::string("SHAPESENSE_CHANNEL_NETWORKS: ") + error.what());
+  }
+  return options;
+}
+
+LcmBus::LcmBus(const std::string& url) : LcmBus(LcmBusOptions::FromEnvironment(url)) {}
+
+LcmBus::LcmBus(const LcmBusOptions& options)
+    : options_(options),
+      url_(ResolveLcmUrl(options.url)),
+      local_url_(options.local_url.empty() ? LocalUrlOf(url_) : options.local_url),
+      host_(options.host.empty() ? HostName() : options.host),
+      networks_(options.routes) {
+  CheckPrefix(options.prefix);
+  rig_ = StartLcm(url_, options.url);
+  if (local_url_ != url_) local_ = StartLcm(local_url_, options.local_url);
+  leaves_host_ = TtlOf(url_) > 0;
+}
+
+LcmBus::~LcmBus() = default;
+
+lcm::LCM& LcmBus::PublishTarget(const std::string& channel) {
+  return local_ && networks_.Of(channel) == Network::kLocal ? *local_ : *rig_;
+}
+
+// A local channel is heard on the local URL's socket, unless the local URL
+// shares the rig's group and port: then the rig's socket receives it too,
+// and a second socket on the port would only receive everything twice.
+std::vector<lcm::LCM*> LcmBus::Receivers(const std::string& channel) {
+  const bool own_port = local_ && GroupAndPort(local_url_) != GroupAndPort(url_);
+  if (!own_port) return {rig_.get()};
+  local_receives_ = true;
+  if (!IsPlainChannel(channel)) return {rig_.get(), local_.get()};
+  return {networks_.Of(channel) == Network::kLocal ? local_.get() : rig_.get()};
+}
+
+void LcmBus::SubscribeRaw(const std::string& channel, RawHandler handler) {
+  auto subscription = std::make_unique<Raw>(Raw{this, std::move(handler)});
+  // A plain function, not a member pointer: GCC 12's UBSan misreads LCM's
+  // member-pointer subscription path (a false "misaligned address").
+  for (lcm::LCM* lcm : Receivers(channel)) {
+    lcm->subscribeFunction(options_.prefix + channel, &Raw::OnRawStatic, subscription.get());
+  }
+  subscriptions_.push_back(std::move(subscription));
+}
+
+void LcmBus::Raw::OnRawStatic(const lcm::ReceiveBuffer* buffer, const std::string& channel,
+                              Raw* self) {
+  const std::span<const uint8_t> bytes(static_cast<const uint8_t*>(buffer->data),
+                                       buffer->data_size);
+  const std::string& prefix = self->bus->options_.prefix;
+  const std::string unprefixed = channel.substr(std::min(prefix.size(), channel.size()));
+  // LCM stamps receipt with the system clock; this host's clock may carry
+  // the tests' offset.
+  const int64_t receive_utime = buffer->recv_utime + TestClockOffsetUs();
+  try {
+    const std::string why = self->handler(bytes, unprefixed, receive_utime);
+    if (!why.empty()) self->bus->Reject(unprefixed, why);
+  } catch (...) {
+    ++self->bus->handler_errors_;
+  }
+}
+
+int LcmBus::Handle(int timeout_ms) {
+  if (!local_receives_) return rig_->handleTimeout(timeout_ms);
+  std::vector<pollfd> waiting = {{rig_->getFileno(), POLLIN, 0}, {local_->getFileno(), POLLIN, 0}};
+  const int ready = ::poll(waiting.data(), waiting.size(), timeout_ms);
+  if (ready < 0) return errno == EINTR ? 0 : -1;
+  int handled = 0;
+  if ((waiting[0].revents & POLLIN) != 0) handled += rig_->handle() == 0 ? 1 : 0;
+  if ((waiting[1].revents & POLLIN) != 0) handled += local_->handle() == 0 ? 1 : 0;
+  return handled;
+}
+
+std::vector<int> LcmBus::FileDescriptors() {
+  if (!local_receives_) return {rig_->getFileno()};
+  return {rig_->getFileno(), local_->getFileno()};
+}
+
+void LcmBus::ObserveClock(const std::string& host, int64_t send_utime, int64_t receive_utime) {
+  if (!host.empty() && host != host_) clock_offsets_.Observe(host, send_utime, receive_utime);
 }
 
 void LcmBus::Reject(const std::string& channel, const std::string& why) {
   ++rejected_;
+  const std::lock_guard lock(mutex_);
   last_rejection_ = channel + ": " + why;
+}
+
+void LcmBus::Refuse(const std::string& channel, int bytes) {
+  ++refused_;
+  const std::lock_guard lock(mutex_);
+  last_rejection_ = channel + ": " + std::to_string(bytes) +
+                    " bytes refused on the rig network (more than one datagram, " +
+                    std::to_string(MaxRigMessageBytes(channel)) +
+                    " bytes; route the channel to the local network, docs/rig.md)";
+}
+
+std::string LcmBus::LastRejection() const {
+  const std::lock_guard lock(mutex_);
+  return last_rejection_;
 }
 
 std::string ResolveLcmUrl(const std::string& url) {
@@ -26,10 +161,6 @@ std::string ResolveLcmUrl(const std::string& url) {
                                                      : "udpm://239.255.76.67:7667?ttl=0";
 }
 
-int64_t NowUtime() {
-  return std::chrono::duration_cast<std::chrono::microseconds>(
-             std::chrono::system_clock::now().time_since_epoch())
-      .count();
-}
+int64_t NowUtime() { return HostUtime(); }
 
 }  // namespace shapesense

@@ -19,13 +19,19 @@ void RunBusLoop(const std::vector<LcmBus*>& buses, const std::atomic<bool>& stop
   using Clock = std::chrono::steady_clock;
   const auto end = Clock::now() + std::chrono::duration_cast<Clock::duration>(
                                       std::chrono::duration<double>(duration_s));
-  std::vector<pollfd> waiting(buses.size());
-  for (size_t i = 0; i < buses.size(); ++i) waiting[i] = {buses[i]->FileDescriptor(), POLLIN, 0};
+  std::vector<pollfd> waiting;
+  std::vector<LcmBus*> owner;  // of each descriptor
+  for (LcmBus* bus : buses) {
+    for (const int descriptor : bus->FileDescriptors()) {
+      waiting.push_back({descriptor, POLLIN, 0});
+      owner.push_back(bus);
+    }
+  }
   while (!stop.load() && (duration_s <= 0 || Clock::now() < end)) {
     const int ready = ::poll(waiting.data(), waiting.size(), 20);
     bool failed = ready < 0 && errno != EINTR;
-    for (size_t i = 0; ready > 0 && i < buses.size(); ++i) {
-      if ((waiting[i].revents & POLLIN) != 0) failed |= buses[i]->Handle(0) < 0;
+    for (size_t i = 0; ready > 0 && i < waiting.size(); ++i) {
+      if ((waiting[i].revents & POLLIN) != 0) failed |= owner[i]->Handle(0) < 0;
     }
     // An LCM error (e.g. a socket gone) must not turn the loop into a spin.
     if (failed) std::this_thread::sleep_for(std::chrono::milliseconds(20));

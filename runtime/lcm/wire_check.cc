@@ -8,7 +8,6 @@ namespace {
 
 // Sizes on the wire (LCM encodes big-endian, booleans as one byte).
 constexpr size_t kHash = 8;
-constexpr size_t kHeader = 16;     // header_t: seq, utime
 constexpr size_t kStageTail = 16;  // stage_time_t after its name: duration_us, end_utime
 // width, height, row_stride, pixel_format, compression, exposure_us, gain_db,
 // trigger_seq, trigger_utime, frame_id, device_timestamp_ns, host_utime
@@ -50,6 +49,8 @@ class WireWalker {
     int64_t length = 0;
     return Count(&length) && length >= 1 && Skip(static_cast<size_t>(length));
   }
+  // The type's hash, then header_t: seq, utime, host, data_age_us.
+  bool HashAndHeader() { return Skip(kHash + 8 + 8) && SkipString() && Skip(8); }
   bool StageTimes() {
     int64_t count = 0;
     if (!Count(&count)) return false;
@@ -88,7 +89,7 @@ namespace {
 // buffer), or 0 when the buffer is not a plausible image_t.
 size_t ImagePixelCountAt(const uint8_t* data, size_t size) {
   WireWalker walk(data, size);
-  if (!walk.Skip(kHash + kHeader) || !walk.SkipString() || !walk.Skip(kImageFixed) ||
+  if (!walk.HashAndHeader() || !walk.SkipString() || !walk.Skip(kImageFixed) ||
       !walk.StageTimes()) {
     return 0;
   }
@@ -124,14 +125,14 @@ std::string DecodeImageFields(const void* data, size_t size, image_t* fields,
 bool WireCheck<voxel_cloud_t>::Plausible(const uint8_t* data, size_t size) {
   WireWalker walk(data, size);
   int64_t voxels = 0;
-  return walk.Skip(kHash + kHeader + kVoxelFixed) && walk.Count(&voxels) &&
+  return walk.HashAndHeader() && walk.Skip(kVoxelFixed) && walk.Count(&voxels) &&
          walk.SkipArray(voxels, 4 + 1) && walk.StageTimes() && walk.AtEnd();
 }
 
 bool WireCheck<silhouettes_t>::Plausible(const uint8_t* data, size_t size) {
   WireWalker walk(data, size);
   int64_t views = 0;
-  if (!walk.Skip(kHash + kHeader + 8 + 8) || !walk.Count(&views)) return false;
+  if (!walk.HashAndHeader() || !walk.Skip(8 + 8) || !walk.Count(&views)) return false;
   for (int64_t k = 0; k < views; ++k) {
     int64_t values = 0;
     // camera, width, height, the mask's, the tape's and the band's runs, the band's values
@@ -147,7 +148,7 @@ bool WireCheck<shape_t>::Plausible(const uint8_t* data, size_t size) {
   WireWalker walk(data, size);
   int64_t points = 0;
   int64_t markers = 0;
-  return walk.Skip(kHash + kHeader + 8 + 8 + 1) && walk.SkipString() && walk.Count(&points) &&
+  return walk.HashAndHeader() && walk.Skip(8 + 8 + 1) && walk.SkipString() && walk.Count(&points) &&
          walk.SkipArray(points, 3 * 8 + 8 + 8) && walk.Count(&markers) &&
          walk.SkipArray(markers, 3 * 8 + 8) && walk.Skip(kShapeTail) && walk.StageTimes() &&
          walk.AtEnd();
@@ -156,14 +157,14 @@ bool WireCheck<shape_t>::Plausible(const uint8_t* data, size_t size) {
 bool WireCheck<tendon_command_t>::Plausible(const uint8_t* data, size_t size) {
   WireWalker walk(data, size);
   int64_t tendons = 0;
-  return walk.Skip(kHash + kHeader) && walk.Count(&tendons) && walk.SkipArray(tendons, 8) &&
+  return walk.HashAndHeader() && walk.Count(&tendons) && walk.SkipArray(tendons, 8) &&
          walk.Skip(kCommandTail) && walk.AtEnd();
 }
 
 bool WireCheck<tendon_state_t>::Plausible(const uint8_t* data, size_t size) {
   WireWalker walk(data, size);
   int64_t tendons = 0;
-  return walk.Skip(kHash + kHeader) && walk.Count(&tendons) &&
+  return walk.HashAndHeader() && walk.Count(&tendons) &&
          walk.SkipArray(tendons, kTendonStateEach) && walk.AtEnd();
 }
 

@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "libs/camera/genicam_pixel_formats.h"
+#include "runtime/host_clock.h"
 #include "services/capture/exposure_matcher.h"
 
 namespace shapesense {
@@ -31,8 +32,6 @@ constexpr std::array<std::pair<const char*, uint32_t>, 7> kPixelFormats = {{
 // After this long without a frame, a timeout asks the device whether it is
 // still there (a register read), at most once per interval.
 constexpr int64_t kProbeIntervalUs = 1'000'000;
-
-int64_t HostUtime() { return g_get_real_time(); }
 
 // OpenCV names a Bayer pattern by the second row's second and third pixels;
 // GenICam by the first row's first two: GenICam RG is OpenCV BG, and so on.
@@ -375,8 +374,9 @@ void AravisCamera::OnTimeout() {
 bool AravisCamera::TakeBuffer(ArvBuffer* buffer, CameraFrame* frame) {
   const int64_t received_ns = static_cast<int64_t>(arv_buffer_get_system_timestamp(buffer));
   const int64_t device_ns = static_cast<int64_t>(arv_buffer_get_timestamp(buffer));
-  const ExposureStamp timing{static_cast<int64_t>(arv_buffer_get_frame_id(buffer)),
-                             device_ns / 1000, received_ns != 0 ? received_ns / 1000 : HostUtime()};
+  const ExposureStamp timing{
+      static_cast<int64_t>(arv_buffer_get_frame_id(buffer)), device_ns / 1000,
+      received_ns != 0 ? received_ns / 1000 + TestClockOffsetUs() : HostUtime()};
   const bool complete = arv_buffer_get_status(buffer) == ARV_BUFFER_STATUS_SUCCESS;
   std::unique_lock lock(mutex_);
   matcher_.Expire(timing.received_utime);

@@ -58,7 +58,7 @@ CarvingService::CarvingService(const CarvingServiceOptions& options, RigSetup se
 }
 
 void CarvingService::SubscribeToImages(const std::vector<std::string>& cameras) {
-  if (!HasImageBuses(bus_.url())) {
+  if (!HasImageBuses(bus_.local_url())) {
     bus_.SubscribeRaw(
         channels::kImagePattern,
         [this](std::span<const uint8_t> buffer, const std::string& channel, int64_t receive_utime) {

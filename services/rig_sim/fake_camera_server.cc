@@ -17,6 +17,7 @@
 #include <thread>
 
 #include "libs/camera/genicam_pixel_formats.h"
+#include "runtime/host_clock.h"
 #include "services/rig_sim/raw_image.h"
 
 namespace shapesense {
@@ -67,8 +68,6 @@ constexpr uint16_t kGvcpPort = 3956;
 // exposures. At normal priority a starved watcher stamped exposures past
 // their triggers' windows and the capture service rightly refused them.
 constexpr int kWatcherRealtimePriority = 20;
-
-int64_t HostUtime() { return g_get_real_time(); }
 
 // Raises `thread` to kWatcherRealtimePriority (SCHED_FIFO), or says on
 // standard error why it stays at normal priority.

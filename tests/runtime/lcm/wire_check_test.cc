@@ -209,7 +209,8 @@ TEST(WireCheckTest, WrongTypesAndGarbageAreRefused) {
   status.service = "carving";
   std::vector<uint8_t> bytes = Encode(status);
   EXPECT_EQ(DecodeMessage(bytes.data(), bytes.size(), &status), "");
-  bytes[8 + 16] = 0xFF;  // the service name's length: negative
+  // After the hash and the header (seq, utime, an empty host, data_age_us):
+  bytes[8 + 8 + 8 + 5 + 8] = 0xFF;  // the service name's length: negative
   EXPECT_NE(DecodeMessage(bytes.data(), bytes.size(), &status), "");
 }
 
