@@ -20,21 +20,20 @@ using Clock = std::chrono::steady_clock;
 
 fs::path FreshFolder() {
   static int count = 0;
-  const fs::path folder =
-      fs::temp_directory_path() /
-      ("shapesense_notify_" + std::to_string(getpid()) + "_" + std::to_string(count++));
+  fs::path folder = fs::temp_directory_path() / ("shapesense_notify_" + std::to_string(getpid()) +
+                                                 "_" + std::to_string(count++));
   fs::remove_all(folder);
   fs::create_directories(folder);
   return folder;
 }
 
 int BoundDatagramSocket(const fs::path& path) {
-  const int fd = ::socket(AF_UNIX, SOCK_DGRAM | SOCK_CLOEXEC, 0);
   sockaddr_un address{};
   address.sun_family = AF_UNIX;
-  if (fd < 0 || path.string().size() >= sizeof(address.sun_path)) {
-    throw std::runtime_error("notify socket: cannot create " + path.string());
-  }
+  const int fd = path.string().size() < sizeof(address.sun_path)
+                     ? ::socket(AF_UNIX, SOCK_DGRAM | SOCK_CLOEXEC, 0)
+                     : -1;
+  if (fd < 0) throw std::runtime_error("notify socket: cannot create " + path.string());
   std::strncpy(address.sun_path, path.c_str(), sizeof(address.sun_path) - 1);
   if (::bind(fd, reinterpret_cast<const sockaddr*>(&address), sizeof(address)) != 0) {
     ::close(fd);
