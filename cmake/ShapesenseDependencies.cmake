@@ -45,6 +45,10 @@ shapesense_require(ARAVIS_FOUND "libaravis-dev libusb-1.0-0-dev" "Aravis 0.8")
 pkg_check_modules(LIBV4L2 QUIET IMPORTED_TARGET libv4l2)
 shapesense_require(LIBV4L2_FOUND "libv4l-dev" "libv4l2")
 
+# sd_notify for the services' readiness and watchdog under systemd.
+pkg_check_modules(LIBSYSTEMD QUIET IMPORTED_TARGET libsystemd)
+shapesense_require(LIBSYSTEMD_FOUND "libsystemd-dev" "libsystemd")
+
 if(SHAPESENSE_BUILD_TESTS)
   find_package(GTest QUIET)
   shapesense_require(GTest_FOUND "libgtest-dev libgmock-dev" "GoogleTest")

@@ -13,6 +13,7 @@ PACKAGES=(
   libyaml-cpp-dev libcli11-dev libspdlog-dev nlohmann-json3-dev
   libgtest-dev libgmock-dev googletest libbenchmark-dev
   iproute2 socat
+  libsystemd-dev systemd
   clang-format clang-tidy
 )
 

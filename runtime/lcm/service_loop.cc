@@ -10,12 +10,12 @@
 namespace shapesense {
 
 void RunBusLoop(LcmBus& bus, const std::atomic<bool>& stop, double duration_s,
-                const std::function<void(int64_t now_utime)>& poll) {
-  RunBusLoop(std::vector<LcmBus*>{&bus}, stop, duration_s, poll);
+                const std::function<void(int64_t now_utime)>& poll, SystemdNotifier& supervisor) {
+  RunBusLoop(std::vector<LcmBus*>{&bus}, stop, duration_s, poll, supervisor);
 }
 
 void RunBusLoop(const std::vector<LcmBus*>& buses, const std::atomic<bool>& stop, double duration_s,
-                const std::function<void(int64_t now_utime)>& poll) {
+                const std::function<void(int64_t now_utime)>& poll, SystemdNotifier& supervisor) {
   using Clock = std::chrono::steady_clock;
   const auto end = Clock::now() + std::chrono::duration_cast<Clock::duration>(
                                       std::chrono::duration<double>(duration_s));
@@ -28,6 +28,7 @@ void RunBusLoop(const std::vector<LcmBus*>& buses, const std::atomic<bool>& stop
     }
   }
   while (!stop.load() && (duration_s <= 0 || Clock::now() < end)) {
+    supervisor.Watchdog();
     const int ready = ::poll(waiting.data(), waiting.size(), 20);
     bool failed = ready < 0 && errno != EINTR;
     for (size_t i = 0; ready > 0 && i < waiting.size(); ++i) {
@@ -37,6 +38,7 @@ void RunBusLoop(const std::vector<LcmBus*>& buses, const std::atomic<bool>& stop
     if (failed) std::this_thread::sleep_for(std::chrono::milliseconds(20));
     poll(NowUtime());
   }
+  supervisor.Stopping();
 }
 
 void KeepFreedMemoryForReuse() {

@@ -14,6 +14,7 @@
 #include "runtime/lcm/image_buses.h"
 #include "runtime/lcm/service_status.h"
 #include "runtime/lcm/truth_message.h"
+#include "runtime/process/systemd_notify.h"
 #include "services/capture/image_message.h"
 #include "services/capture/trigger_queue.h"
 
@@ -102,6 +103,7 @@ class CaptureService {
   void UpdateStatus(bool last = false);
   void SleepUntil(Clock::time_point until) const;
   CaptureSummary Summary() const;
+  void MaybeReady(SystemdNotifier& supervisor);
 
   const CaptureServiceArgs& args_;
   const CaptureServiceOptions& options_;
@@ -117,6 +119,7 @@ class CaptureService {
   std::vector<std::unique_ptr<CameraSlot>> slots_;
   std::latch started_;  // every camera has had its first attempt to open
   std::atomic<bool> stopping_{false};
+  bool ready_ = false;  // READY=1 sent
   std::atomic<int64_t> triggers_{0};
   int64_t truth_seq_ = 0;
   int64_t stale_trigger_us_ = 0;
@@ -366,6 +369,16 @@ CaptureSummary CaptureService::Summary() const {
   return summary;
 }
 
+// Ready once every camera has had its first attempt to open: those that
+// failed are retried, and the status says how many are up.
+void CaptureService::MaybeReady(SystemdNotifier& supervisor) {
+  if (ready_ || !started_.try_wait()) return;
+  ready_ = true;
+  const auto up =
+      std::count_if(slots_.begin(), slots_.end(), [](const auto& s) { return s->up.load(); });
+  supervisor.Ready(std::to_string(up) + " of " + std::to_string(slots_.size()) + " cameras up");
+}
+
 CaptureSummary CaptureService::Run(const std::atomic<bool>& stop) {
   world_ = MakeSimulatedWorld(options_, NowUtime());
   MakeSlots();
@@ -384,12 +397,16 @@ CaptureSummary CaptureService::Run(const std::atomic<bool>& stop) {
     threads.emplace_back([this, s = slot.get()] { RelayLoop(*s); });
   }
   if (any_software) threads.emplace_back([this] { TriggerLoop(); });
+  SystemdNotifier supervisor;
   const Clock::time_point end = Clock::now() + std::chrono::duration_cast<Clock::duration>(
                                                    std::chrono::duration<double>(args_.duration_s));
   while (!stop && (args_.duration_s <= 0.0 || Clock::now() < end)) {
+    MaybeReady(supervisor);
+    supervisor.Watchdog();
     std::this_thread::sleep_for(kStatusTick);
     UpdateStatus();
   }
+  supervisor.Stopping();
   stopping_ = true;
   for (std::thread& thread : threads) thread.join();
   UpdateStatus(/*last=*/true);

@@ -6,6 +6,7 @@
 #include "runtime/lcm/service_config.h"
 #include "runtime/lcm/service_loop.h"
 #include "runtime/lcm/wire_check.h"
+#include "runtime/process/systemd_notify.h"
 
 namespace shapesense {
 namespace {
@@ -239,7 +240,11 @@ service_status_t RunCarvingService(const ServiceArgs& args, const std::atomic<bo
   CarvingService service(options, std::move(setup), bus);
   log << "shapesense-carving: running on "
       << (options.lcm_url.empty() ? "LCM's default" : options.lcm_url) << '\n';
-  RunBusLoop(service.Buses(), stop, args.duration_s, [&](int64_t now) { service.Poll(now); });
+  // Ready only now: the table is built and the images subscribed to.
+  SystemdNotifier supervisor;
+  supervisor.Ready("carving frame-sets");
+  RunBusLoop(
+      service.Buses(), stop, args.duration_s, [&](int64_t now) { service.Poll(now); }, supervisor);
   return service.Status(NowUtime());
 }
 

@@ -467,7 +467,8 @@ void ControllerClient::Finish(const std::string& why) {
   status_.Publish(bus_, clock_());
 }
 
-int RunControllerLoop(ControllerClient& client, const std::atomic<bool>& stop) {
+int RunControllerLoop(ControllerClient& client, const std::atomic<bool>& stop,
+                      SystemdNotifier& supervisor) {
   using Clock = std::chrono::steady_clock;
   const auto period = std::chrono::duration_cast<Clock::duration>(
       std::chrono::duration<double>(client.loop_period()));
@@ -475,11 +476,14 @@ int RunControllerLoop(ControllerClient& client, const std::atomic<bool>& stop) {
   const auto start = Clock::now();
   auto next = start;
   while (!client.finished()) {
+    supervisor.Watchdog();
     if (stop.load()) {
+      supervisor.Stopping();
       client.Finish("SIGINT or SIGTERM");
       break;
     }
     if (duration_s > 0.0 && Clock::now() - start >= std::chrono::duration<double>(duration_s)) {
+      supervisor.Stopping();
       client.Finish("the configured duration has passed");
       break;
     }

@@ -36,6 +36,7 @@
 #include "libs/control/targets.h"
 #include "runtime/lcm/lcm_bus.h"
 #include "runtime/lcm/service_status.h"
+#include "runtime/process/systemd_notify.h"
 #include "services/controller/actuators/actuator_driver.h"
 #include "services/controller/actuators/simulated_driver.h"
 #include "services/controller/controller_config.h"
@@ -177,7 +178,10 @@ class ControllerClient {
 
 // Runs a started client at its loop rate until `stop` (SIGINT / SIGTERM),
 // the configured duration, or a failure, and finishes it. Returns the exit
-// code: 0 for a clean stop, 1 when the driver failed.
-int RunControllerLoop(ControllerClient& client, const std::atomic<bool>& stop);
+// code: 0 for a clean stop, 1 when the driver failed. Pings `supervisor`'s
+// watchdog every step (a step that hangs stops the pings), and says
+// STOPPING=1 on a stop or at the end of the duration.
+int RunControllerLoop(ControllerClient& client, const std::atomic<bool>& stop,
+                      SystemdNotifier& supervisor);
 
 }  // namespace shapesense

@@ -9,6 +9,7 @@
 #include "libs/core/error.h"
 #include "runtime/command_line.h"
 #include "runtime/lcm/service_loop.h"
+#include "runtime/process/systemd_notify.h"
 #include "services/controller/controller_client.h"
 #include "services/controller/rig_plant_driver.h"
 
@@ -88,7 +89,10 @@ int RunController(const ControllerSetup& setup, const std::atomic<bool>& stop, s
     driver->Disconnect();
     return kExitFailed;
   }
-  const int code = RunControllerLoop(client, stop);
+  // Ready only now: the actuators are connected and the loop starts.
+  SystemdNotifier supervisor;
+  supervisor.Ready("controlling " + driver->description());
+  const int code = RunControllerLoop(client, stop, supervisor);
   PrintSummary(client, log, out);
   PrintLinkHealth(*driver, out);
   if (code != 0) out << kName << ": failed: " << client.error() << std::endl;

@@ -15,6 +15,7 @@
 #include "runtime/lcm/lcm_bus.h"
 #include "runtime/lcm/service_status.h"
 #include "runtime/lcm/truth_message.h"
+#include "runtime/process/systemd_notify.h"
 #include "services/rig_sim/fake_camera_server.h"
 
 namespace shapesense {
@@ -252,8 +253,11 @@ void RunRigSim(const RigSimArgs& args, const std::atomic<bool>& stop, RigSimCont
   server.SetFaults(faults);
   if (plant) server.SetPlant(plant->world());
   StartCameras(server, setup);
+  SystemdNotifier supervisor;
+  supervisor.Ready("serving " + std::to_string(server.num_cameras()) + " cameras");
   int64_t truth_seq = 0, images = 0, errors = 0;
   while (!stop) {
+    supervisor.Watchdog();  // from this loop: if it hangs, systemd restarts the rig
     const int64_t now = NowUtime();
     const double t = static_cast<double>(now - start_utime) * 1e-6;
     if (args.duration_s > 0.0 && t >= args.duration_s) break;
@@ -265,6 +269,7 @@ void RunRigSim(const RigSimArgs& args, const std::atomic<bool>& stop, RigSimCont
     status.MaybePublish(bus, now);
     std::this_thread::sleep_for(kLoopPeriod);
   }
+  supervisor.Stopping();
   PublishTruth(server, bus, status, &truth_seq, args.backdrop_only, plant_world);
 }
 

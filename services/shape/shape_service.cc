@@ -12,6 +12,7 @@
 #include "runtime/lcm/service_loop.h"
 #include "runtime/lcm/silhouette_message.h"
 #include "runtime/lcm/voxel_cloud_message.h"
+#include "runtime/process/systemd_notify.h"
 
 namespace shapesense {
 namespace {
@@ -230,7 +231,10 @@ service_status_t RunShapeService(const ServiceArgs& args, const std::atomic<bool
       << (options.lcm_url.empty() ? "LCM's default" : options.lcm_url)
       << (options.shape.refine_with_silhouettes ? ", refining against the silhouettes" : "")
       << (options.configuration.enabled ? ", sensing the configuration q" : "") << '\n';
-  RunBusLoop(bus, stop, args.duration_s, [&](int64_t now) { service.Poll(now); });
+  SystemdNotifier supervisor;
+  supervisor.Ready("measuring shapes");
+  RunBusLoop(
+      bus, stop, args.duration_s, [&](int64_t now) { service.Poll(now); }, supervisor);
   return service.Status(NowUtime());
 }
 

@@ -1,0 +1,50 @@
+#include "runtime/process/systemd_notify.h"
+
+#include <systemd/sd-daemon.h>
+
+#include <cstdint>
+#include <cstdlib>
+
+namespace shapesense {
+namespace {
+
+std::chrono::microseconds WatchdogTimeoutFromEnvironment() {
+  uint64_t usec = 0;
+  // 0: do not unset the environment (children and tests read it too).
+  if (sd_watchdog_enabled(0, &usec) <= 0) return std::chrono::microseconds(0);
+  return std::chrono::microseconds(static_cast<int64_t>(usec));
+}
+
+}  // namespace
+
+SystemdNotifier::SystemdNotifier()
+    : enabled_(std::getenv("NOTIFY_SOCKET") != nullptr),
+      watchdog_timeout_(enabled_ ? WatchdogTimeoutFromEnvironment()
+                                 : std::chrono::microseconds(0)) {}
+
+void SystemdNotifier::Ready(const std::string& status) { Send("READY=1\nSTATUS=" + status); }
+
+void SystemdNotifier::Watchdog() {
+  if (watchdog_timeout_.count() <= 0) return;
+  const auto now = std::chrono::steady_clock::now();
+  if (now < next_watchdog_) return;
+  next_watchdog_ = now + watchdog_timeout_ / 2;
+  Send("WATCHDOG=1");
+}
+
+void SystemdNotifier::Status(const std::string& status) { Send("STATUS=" + status); }
+
+void SystemdNotifier::Stopping() {
+  if (stopping_sent_) return;
+  stopping_sent_ = true;
+  Send("STOPPING=1");
+}
+
+void SystemdNotifier::Send(const std::string& state) const {
+  if (!enabled_) return;
+  // A supervisor that went away must not stop the service: the result is
+  // only whether systemd heard, and there is nothing better to do if not.
+  sd_notify(0, state.c_str());
+}
+
+}  // namespace shapesense

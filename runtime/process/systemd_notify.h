@@ -1,0 +1,45 @@
+#pragma once
+
+// What a service tells systemd when it runs as a Type=notify unit: ready,
+// alive (the watchdog), its status in words, stopping. Over libsystemd's
+// sd_notify; does nothing when NOTIFY_SOCKET is unset (not under systemd,
+// or in a test), so the services call it unconditionally.
+#include <chrono>
+#include <string>
+
+namespace shapesense {
+
+class SystemdNotifier {
+ public:
+  // Reads NOTIFY_SOCKET and the watchdog period (WATCHDOG_USEC, for this
+  // process when WATCHDOG_PID is set) once. The environment is left as it
+  // is, so that a child started later sees what this process saw.
+  SystemdNotifier();
+
+  // True when a supervisor listens (NOTIFY_SOCKET is set).
+  bool enabled() const { return enabled_; }
+  // The supervisor's watchdog timeout; zero when it asked for none.
+  std::chrono::microseconds watchdog_timeout() const { return watchdog_timeout_; }
+
+  // READY=1 with a status line: call once the service can do its work.
+  void Ready(const std::string& status);
+  // WATCHDOG=1 at most once per half the watchdog timeout (systemd's
+  // advice), so a loop can call it every iteration. Call it from the loop
+  // that does the work: when that loop hangs, the pings stop and systemd
+  // restarts the service.
+  void Watchdog();
+  // STATUS=text, shown by `systemctl status`.
+  void Status(const std::string& status);
+  // STOPPING=1, once: the service is going down on purpose.
+  void Stopping();
+
+ private:
+  void Send(const std::string& state) const;
+
+  bool enabled_ = false;
+  std::chrono::microseconds watchdog_timeout_{0};
+  std::chrono::steady_clock::time_point next_watchdog_{};
+  bool stopping_sent_ = false;
+};
+
+}  // namespace shapesense
