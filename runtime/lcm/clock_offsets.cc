@@ -23,16 +23,26 @@ void ClockOffsets::Observe(const std::string& host, int64_t send_utime, int64_t 
   estimate.last_receive_utime = receive_utime;
 }
 
+int64_t ClockOffsets::SmallestDelay(const Estimate& estimate) {
+  return estimate.has_previous ? std::min(estimate.current_min, estimate.previous_min)
+                               : estimate.current_min;
+}
+
 std::vector<HostClockOffset> ClockOffsets::Snapshot() const {
   const std::lock_guard lock(mutex_);
   std::vector<HostClockOffset> offsets;
   for (const auto& [host, estimate] : hosts_) {
-    const int64_t smallest = estimate.has_previous
-                                 ? std::min(estimate.current_min, estimate.previous_min)
-                                 : estimate.current_min;
-    offsets.push_back({host, -smallest, estimate.samples, estimate.last_receive_utime});
+    offsets.push_back(
+        {host, -SmallestDelay(estimate), estimate.samples, estimate.last_receive_utime});
   }
   return offsets;
+}
+
+std::optional<int64_t> ClockOffsets::OffsetOf(const std::string& host) const {
+  const std::lock_guard lock(mutex_);
+  const auto found = hosts_.find(host);
+  if (found == hosts_.end()) return std::nullopt;
+  return -SmallestDelay(found->second);
 }
 
 }  // namespace shapesense

@@ -11,6 +11,7 @@
 #include <cstdint>
 #include <map>
 #include <mutex>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -35,6 +36,9 @@ class ClockOffsets {
 
   // Every host heard from, sorted by name. Thread-safe.
   std::vector<HostClockOffset> Snapshot() const;
+  // `host`'s offset (its clock minus ours, µs), nullopt when not heard from
+  // (this host among them). Thread-safe.
+  std::optional<int64_t> OffsetOf(const std::string& host) const;
 
  private:
   struct Estimate {
@@ -45,6 +49,7 @@ class ClockOffsets {
     int64_t samples = 0;
     int64_t last_receive_utime = 0;
   };
+  static int64_t SmallestDelay(const Estimate& estimate);
 
   int64_t half_window_us_;
   mutable std::mutex mutex_;

@@ -240,4 +240,12 @@ AssemblyResult FrameSetAssembler::Add(image_t image, int64_t now_utime) {
   return result;
 }
 
+int64_t MeasuredUtime(const FrameSet& set) {
+  int64_t earliest = std::numeric_limits<int64_t>::max();
+  for (size_t k = 0; k < set.images.size() && k < set.receive_utime.size(); ++k) {
+    earliest = std::min(earliest, set.receive_utime[k] - set.images[k].header.data_age_us);
+  }
+  return earliest == std::numeric_limits<int64_t>::max() ? set.complete_utime : earliest;
+}
+
 }  // namespace shapesense

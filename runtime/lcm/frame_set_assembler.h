@@ -62,6 +62,11 @@ struct FrameSetKey {
 };
 inline FrameSetKey KeyOf(const FrameSet& set) { return {set.trigger_seq, set.trigger_utime}; }
 
+// When the set's measurement was taken, on this host's clock: each image's
+// receive time less its age at publish (header_t.data_age_us), the earliest
+// of them. Never the trigger time itself, which is the camera host's clock.
+int64_t MeasuredUtime(const FrameSet& set);
+
 enum class AssemblyOutcome {
   kPending,        // joined or started a set that still misses images
   kCompleted,      // completed a set

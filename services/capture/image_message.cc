@@ -1,5 +1,6 @@
 #include "services/capture/image_message.h"
 
+#include <algorithm>
 #include <stdexcept>
 
 #include "runtime/lcm/image_codec.h"
@@ -43,6 +44,8 @@ image_t ToImageMessage(const std::string& camera, const CameraFrame& frame, int6
   message.frame_id = frame.frame_id;
   message.device_timestamp_ns = frame.device_timestamp_ns;
   message.host_utime = frame.host_utime;
+  // The trigger and the publish are both this host's clock: the age is exact.
+  message.header.data_age_us = std::max<int64_t>(0, publish_utime - message.trigger_utime);
   message.stage_times = {CaptureStage(frame, message.trigger_utime)};
   message.num_stage_times = 1;
   return message;

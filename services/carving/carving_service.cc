@@ -1,5 +1,7 @@
 #include "services/carving/carving_service.h"
 
+#include <algorithm>
+
 #include "libs/core/error.h"
 #include "runtime/lcm/channels.h"
 #include "runtime/lcm/image_codec.h"
@@ -191,13 +193,17 @@ void CarvingService::CarveAndPublish(CarvingJob& job) {
   }
   // The silhouettes first: the shape service then usually has them when the
   // cloud arrives, and measures at once.
+  const int64_t now = NowUtime();
+  const int64_t age = std::max<int64_t>(0, now - MeasuredUtime(set));
   output_.silhouettes_message.header.seq = voxels_seq_;
-  output_.silhouettes_message.header.utime = NowUtime();
+  output_.silhouettes_message.header.utime = now;
+  output_.silhouettes_message.header.data_age_us = age;
   if (!bus_.Publish(channels::kSilhouettes, output_.silhouettes_message)) {
     status_.Error("could not publish on " + std::string(channels::kSilhouettes));
   }
   output_.message.header.seq = voxels_seq_++;
-  output_.message.header.utime = NowUtime();
+  output_.message.header.utime = now;
+  output_.message.header.data_age_us = age;
   if (!bus_.Publish(channels::kVoxels, output_.message)) {
     status_.Error("could not publish on " + std::string(channels::kVoxels));
     return;

@@ -78,7 +78,10 @@ void ControllerClient::Subscribe() {
   // Callbacks only queue; the step does the work.
   bus_.Subscribe<shape_t>(channels::kShape, [this](shape_t&& shape, const std::string&, int64_t) {
     status_.Received();
-    if (PushBounded(pending_shapes_, std::move(shape), kShapeQueue)) InputDropped();
+    const int64_t measured = clock_() - shape.header.data_age_us;
+    if (PushBounded(pending_shapes_, ArrivedShape{std::move(shape), measured}, kShapeQueue)) {
+      InputDropped();
+    }
   });
   bus_.Subscribe<estop_t>(channels::kEstop, [this](estop_t&& estop, const std::string&, int64_t) {
     status_.Received();
@@ -88,6 +91,11 @@ void ControllerClient::Subscribe() {
   bus_.Subscribe<configuration_target_t>(
       channels::kTarget, [this](configuration_target_t&& target, const std::string&, int64_t) {
         status_.Received();
+        // A start time is the sender's clock: moved onto this one by the
+        // sender's measured offset (its own messages are a sample of it).
+        if (target.start_utime != 0) {
+          target.start_utime -= bus_.clock_offsets().OffsetOf(target.header.host).value_or(0);
+        }
         if (PushBounded(pending_targets_, std::move(target), kTargetQueue)) InputDropped();
       });
 }
@@ -169,9 +177,9 @@ double ControllerClient::SecondsSinceStart(int64_t utime) const {
 
 void ControllerClient::TakeShapes(int64_t now) {
   for (; !pending_shapes_.empty(); pending_shapes_.pop_front()) {
-    const shape_t& shape = pending_shapes_.front();
+    const shape_t& shape = pending_shapes_.front().shape;
     std::string why;
-    const ShapeUse use = CheckShape(shape, now, &why);
+    const ShapeUse use = CheckShape(shape, &why);
     if (use == ShapeUse::kMalformed) {
       ++counters_.shapes_rejected;
       counters_.last_shape_rejection = why;
@@ -189,7 +197,7 @@ void ControllerClient::TakeShapes(int64_t now) {
     sensed_trigger_utime_ = shape.trigger_utime;
     sensed_seq_ = shape.trigger_seq;
     sensed_.configuration = Configuration(shape.q[0], shape.q[1], shape.q[2], shape.q[3]);
-    sensed_.time = SecondsSinceStart(shape.trigger_utime);
+    sensed_.time = SecondsSinceStart(pending_shapes_.front().measured_utime);
     sensed_.valid = true;
   }
 }

@@ -145,8 +145,16 @@ class ControllerClient {
   ServiceStatus status_{"controller"};
   ControllerCounters counters_;
 
+  // A shape as it arrived, dated on this clock: its receive time less its
+  // age at publish (header_t.data_age_us). Never its trigger time, which is
+  // the camera host's clock, perhaps off this one.
+  struct ArrivedShape {
+    shape_t shape;
+    int64_t measured_utime = 0;
+  };
+
   // What the callbacks queued for the next step.
-  std::deque<shape_t> pending_shapes_;
+  std::deque<ArrivedShape> pending_shapes_;
   std::deque<configuration_target_t> pending_targets_;
   std::deque<estop_t> pending_estops_;
 

@@ -6,9 +6,10 @@
 namespace shapesense {
 namespace {
 
-constexpr int64_t kFutureTolerance = 1'000'000;  // µs: clocks of a rig's hosts differ a little
-constexpr double kStartWindow = 60e6;            // µs
-constexpr double kLongestMove = 3600.0;          // s
+// An age past this is garbage, not a stale shape (which the watchdog handles), µs.
+constexpr int64_t kLargestAge = 3'600'000'000;
+constexpr double kStartWindow = 60e6;    // µs
+constexpr double kLongestMove = 3600.0;  // s
 
 bool AllFinite(const double* values, int count) {
   for (int i = 0; i < count; ++i) {
@@ -19,7 +20,7 @@ bool AllFinite(const double* values, int count) {
 
 }  // namespace
 
-ShapeUse CheckShape(const shape_t& shape, int64_t now_utime, std::string* why) {
+ShapeUse CheckShape(const shape_t& shape, std::string* why) {
   if (!shape.valid || !shape.has_configuration) {
     *why = shape.valid ? "no configuration" : "not measured: " + shape.error;
     return ShapeUse::kNoConfiguration;
@@ -28,11 +29,9 @@ ShapeUse CheckShape(const shape_t& shape, int64_t now_utime, std::string* why) {
     *why = "q: expected finite numbers";
   } else if (shape.trigger_utime <= 0) {
     *why = "trigger_utime: expected a time, got " + std::to_string(shape.trigger_utime);
-  } else if (shape.trigger_utime > now_utime + kFutureTolerance) {
-    char seconds[32];
-    std::snprintf(seconds, sizeof(seconds), "%.3f",
-                  static_cast<double>(shape.trigger_utime - now_utime) * 1e-6);
-    *why = "trigger_utime: " + std::string(seconds) + " s in the future";
+  } else if (shape.header.data_age_us < 0 || shape.header.data_age_us > kLargestAge) {
+    *why = "data_age_us: expected 0 to " + std::to_string(kLargestAge) + " µs, got " +
+           std::to_string(shape.header.data_age_us);
   } else {
     why->clear();
     return ShapeUse::kUsable;

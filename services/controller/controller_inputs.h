@@ -18,10 +18,11 @@ enum class ShapeUse {
   kMalformed,        // rejected and counted
 };
 
-// Whether `shape` carries a usable configuration at `now_utime`; *why says
-// why not. Malformed: q not finite, no trigger time, a trigger time more
-// than a second in the future.
-ShapeUse CheckShape(const shape_t& shape, int64_t now_utime, std::string* why);
+// Whether `shape` carries a usable configuration; *why says why not.
+// Malformed: q not finite, no trigger time, an age at publish that is
+// negative or past an hour. (Its trigger time is the camera host's clock,
+// so it is never compared with this one.)
+ShapeUse CheckShape(const shape_t& shape, std::string* why);
 
 // The shape to keep in the controller's LCM log: q, times and residuals,
 // without the centreline and markers.

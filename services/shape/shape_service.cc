@@ -132,7 +132,7 @@ void ShapeService::OnSilhouettes(const silhouettes_t& message, int64_t receive_u
   std::optional<Waiting<voxel_cloud_t>> voxels =
       TakeWaiting(waiting_voxels_, FrameSetOf(silhouettes));
   if (voxels) {
-    worker_.Push({std::move(voxels->message), std::move(silhouettes)});
+    worker_.Push({std::move(voxels->message), std::move(silhouettes), voxels->measured_utime});
     return;
   }
   // Usually the silhouettes come first: the carving service sends them first.
@@ -151,27 +151,33 @@ void ShapeService::OnVoxels(voxel_cloud_t&& voxels, int64_t receive_utime) {
     status_.Note(NameOf(voxels) + ": " + error);
     return;
   }
+  // Dated on this host's clock now, whatever the publisher's clock says.
+  const int64_t measured = receive_utime - voxels.header.data_age_us;
   if (!stage_.wants_silhouettes()) {
-    worker_.Push({std::move(voxels), std::nullopt});
+    worker_.Push({std::move(voxels), std::nullopt, measured});
     return;
   }
   std::optional<Waiting<SilhouetteSet>> silhouettes =
       TakeWaiting(waiting_silhouettes_, FrameSetOf(voxels));
   if (silhouettes) {
-    worker_.Push({std::move(voxels), std::move(silhouettes->message)});
+    worker_.Push({std::move(voxels), std::move(silhouettes->message), measured});
     return;
   }
-  waiting_voxels_.push_back({std::move(voxels), receive_utime});
+  waiting_voxels_.push_back({std::move(voxels), receive_utime, measured});
   if (waiting_voxels_.size() > static_cast<size_t>(options_.max_waiting)) {
-    worker_.Push({std::move(waiting_voxels_.front().message), std::nullopt});
+    PushUnrefined(waiting_voxels_.front());
     waiting_voxels_.pop_front();
   }
+}
+
+void ShapeService::PushUnrefined(Waiting<voxel_cloud_t>& waiting) {
+  worker_.Push({std::move(waiting.message), std::nullopt, waiting.measured_utime});
 }
 
 void ShapeService::Poll(int64_t now_utime) {
   while (!waiting_voxels_.empty() &&
          now_utime - waiting_voxels_.front().receive_utime > pairing_timeout_us_) {
-    worker_.Push({std::move(waiting_voxels_.front().message), std::nullopt});
+    PushUnrefined(waiting_voxels_.front());
     waiting_voxels_.pop_front();
   }
   std::erase_if(waiting_silhouettes_, [&](const Waiting<SilhouetteSet>& w) {
@@ -195,6 +201,8 @@ void ShapeService::MeasureAndPublish(const Job& job) {
   if (!output_.warning.empty()) status_.Error(NameOf(job.voxels) + ": " + output_.warning);
   output_.message.header.seq = shape_seq_++;
   output_.message.header.utime = NowUtime();
+  output_.message.header.data_age_us =
+      std::max<int64_t>(0, output_.message.header.utime - job.measured_utime);
   if (!bus_.Publish(channels::kShape, output_.message)) {
     status_.Error("could not publish on " + std::string(channels::kShape));
     return;

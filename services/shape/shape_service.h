@@ -117,11 +117,15 @@ class ShapeService {
   struct Job {
     voxel_cloud_t voxels;
     std::optional<SilhouetteSet> silhouettes;
+    // The measurement's instant on this host's clock (the cloud's receive
+    // time less its age at publish): what dates the shape, hop by hop.
+    int64_t measured_utime = 0;
   };
   template <class Message>
   struct Waiting {
     Message message;
-    int64_t receive_utime = 0;
+    int64_t receive_utime = 0;   // for the pairing timeout
+    int64_t measured_utime = 0;  // a cloud's: as Job's
   };
 
   // The cloud is moved in from the LCM callback (tens of kB every frame-set);
@@ -129,6 +133,7 @@ class ShapeService {
   void OnSilhouettes(const silhouettes_t& message, int64_t receive_utime);
   void OnVoxels(voxel_cloud_t&& voxels, int64_t receive_utime);
   void MeasureAndPublish(const Job& job);
+  void PushUnrefined(Waiting<voxel_cloud_t>& waiting);
 
   ShapeServiceOptions options_;
   LcmBus& bus_;

@@ -349,18 +349,18 @@ TEST(ControllerLoopTest, MalformedAndUnreachableTargetsAreRejectedWithAReason) {
     EXPECT_FALSE(rig.client().last_step().has_target);
   }
 
-  // Shapes with a NaN q or from the future are rejected too, and not used.
+  // Shapes with a NaN q or a negative age are rejected too, and not used.
   shape_t shape{};
   shape.valid = shape.has_configuration = true;
   shape.trigger_utime = rig.now();
   shape.q[0] = std::nan("");
   rig.bus().Publish(channels::kShape, shape);
   shape.q[0] = 0.0;
-  shape.trigger_utime = rig.now() + 10'000'000;
+  shape.header.data_age_us = -10'000'000;
   rig.bus().Publish(channels::kShape, shape);
   rig.Step();
   EXPECT_EQ(counters.shapes_rejected, 2);
-  EXPECT_THAT(counters.last_shape_rejection, HasSubstr("trigger_utime: 9.990 s in the future"));
+  EXPECT_THAT(counters.last_shape_rejection, HasSubstr("data_age_us: expected 0 to"));
 
   EXPECT_EQ(rig.client().StatusSnapshot().rejected, 1 + 6 + 2);
   rig.RunFor(1.0);

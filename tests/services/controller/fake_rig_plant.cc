@@ -79,6 +79,7 @@ void FakeRigPlant::Tick() {
     shape_t& shape = in_flight_.front();
     shape.header.seq = shape.trigger_seq;
     shape.header.utime = now;
+    shape.header.data_age_us = now - shape.trigger_utime;
     bus_.Publish(channels::kShape, shape);
     in_flight_.pop_front();
   }
