@@ -43,14 +43,14 @@ struct ChildError {
 
 // "<step> failed: <errno text>"; an exec failure as the errno text alone.
 std::string Describe(const ChildError& failure) {
-  const std::string error = std::strerror(failure.error);
+  const char* const error = std::strerror(failure.error);
   switch (failure.step) {
     case ChildStep::kNetworkNamespace:
-      return "setns() into its network namespace failed: " + error;
+      return std::string("setns() into its network namespace failed: ") + error;
     case ChildStep::kUtsNamespace:
-      return "unshare(CLONE_NEWUTS) for its host name failed: " + error;
+      return std::string("unshare(CLONE_NEWUTS) for its host name failed: ") + error;
     case ChildStep::kHostName:
-      return "sethostname() failed: " + error;
+      return std::string("sethostname() failed: ") + error;
     case ChildStep::kExec:
       break;
   }
@@ -119,7 +119,8 @@ std::vector<std::string> ChildEnvironment(
                                       [&](const auto& variable) { return variable.first == name; });
     if (!replaced) entries.emplace_back(text);
   }
-  for (const auto& [name, value] : variables) entries.push_back(name + "=" + value);
+  for (const auto& [name, value] : variables)
+    entries.push_back(std::string(name).append("=").append(value));
   return entries;
 }
 
