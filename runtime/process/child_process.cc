@@ -2,12 +2,14 @@
 
 #include <fcntl.h>
 #include <poll.h>
+#include <sched.h>
 #include <signal.h>
 #include <sys/prctl.h>
 #include <sys/resource.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <cstring>
 #include <stdexcept>
@@ -30,15 +32,60 @@ Pipe MakePipe() {
   return {fds[0], fds[1]};
 }
 
-// In the forked child: only async-signal-safe calls. An exec failure is
-// reported as its errno on `error_fd`.
-[[noreturn]] void ExecChild(char* const* args, const ChildOptions& options, const Pipe& out,
-                            int error_fd, pid_t parent) {
+// What a child failed at before its program ran, with the errno, sent to
+// the parent on the error pipe.
+enum class ChildStep : int { kExec, kNetworkNamespace, kUtsNamespace, kHostName };
+
+struct ChildError {
+  ChildStep step = ChildStep::kExec;
+  int error = 0;  // 0: no failure (the pipe closed on exec without a word)
+};
+
+// "<step> failed: <errno text>"; an exec failure as the errno text alone.
+std::string Describe(const ChildError& failure) {
+  const char* const error = std::strerror(failure.error);
+  switch (failure.step) {
+    case ChildStep::kNetworkNamespace:
+      return std::string("setns() into its network namespace failed: ") + error;
+    case ChildStep::kUtsNamespace:
+      return std::string("unshare(CLONE_NEWUTS) for its host name failed: ") + error;
+    case ChildStep::kHostName:
+      return std::string("sethostname() failed: ") + error;
+    case ChildStep::kExec:
+      break;
+  }
+  return error;
+}
+
+[[noreturn]] void FailChild(int error_fd, ChildStep step) {
+  const ChildError failure{step, errno};
+  if (write(error_fd, &failure, sizeof(failure)) < 0) _exit(127);
+  _exit(127);
+}
+
+// Moves the forked child onto its host: network namespace, then host name.
+void PlaceChild(const ChildOptions& options, int error_fd) {
+  if (options.network_namespace >= 0 && setns(options.network_namespace, CLONE_NEWNET) != 0) {
+    FailChild(error_fd, ChildStep::kNetworkNamespace);
+  }
+  if (options.host_name.empty()) return;
+  if (unshare(CLONE_NEWUTS) != 0) FailChild(error_fd, ChildStep::kUtsNamespace);
+  if (sethostname(options.host_name.data(), options.host_name.size()) != 0) {
+    FailChild(error_fd, ChildStep::kHostName);
+  }
+}
+
+// In the forked child: only async-signal-safe calls (the environment was
+// built before the fork). A failure is reported on `error_fd`.
+[[noreturn]] void ExecChild(char* const* args, char* const* environment,
+                            const ChildOptions& options, const Pipe& out, int error_fd,
+                            pid_t parent) {
   if (options.own_process_group) setpgid(0, 0);
   if (options.end_with_parent) {
     prctl(PR_SET_PDEATHSIG, SIGTERM);
     if (getppid() != parent) _exit(1);  // the parent died before prctl
   }
+  PlaceChild(options, error_fd);
   dup2(out.write, STDOUT_FILENO);
   if (options.capture_stderr) dup2(out.write, STDERR_FILENO);
   if (options.nice != 0 && setpriority(PRIO_PROCESS, 0, options.nice) != 0) {
@@ -47,48 +94,71 @@ Pipe MakePipe() {
       // nothing more can be said from here
     }
   }
-  execv(args[0], args);
-  const int error = errno;
-  if (write(error_fd, &error, sizeof(error)) < 0) _exit(127);
-  _exit(127);
+  execve(args[0], args, environment);
+  FailChild(error_fd, ChildStep::kExec);
 }
 
-// The child's errno when its exec failed; 0 when it succeeded (the pipe
-// closed on exec without a word).
-int ExecError(int fd) {
-  int error = 0;
+// What the child failed at, or {kExec, 0} when its exec succeeded.
+ChildError ReadChildError(int fd) {
+  ChildError failure;
   ssize_t n;
   do {
-    n = read(fd, &error, sizeof(error));
+    n = read(fd, &failure, sizeof(failure));
   } while (n < 0 && errno == EINTR);
-  return n == static_cast<ssize_t>(sizeof(error)) ? error : 0;
+  return n == static_cast<ssize_t>(sizeof(failure)) ? failure : ChildError{};
+}
+
+// The parent's environment with `variables` set, as "NAME=value" entries.
+std::vector<std::string> ChildEnvironment(
+    const std::vector<std::pair<std::string, std::string>>& variables) {
+  std::vector<std::string> entries;
+  for (char** entry = environ; *entry != nullptr; ++entry) {
+    const std::string_view text(*entry);
+    const std::string_view name = text.substr(0, text.find('='));
+    const bool replaced = std::any_of(variables.begin(), variables.end(),
+                                      [&](const auto& variable) { return variable.first == name; });
+    if (!replaced) entries.emplace_back(text);
+  }
+  for (const auto& [name, value] : variables)
+    entries.push_back(std::string(name).append("=").append(value));
+  return entries;
+}
+
+// Pointers into `strings`, ending with nullptr, as exec wants them.
+std::vector<char*> ExecArray(const std::vector<std::string>& strings) {
+  std::vector<char*> pointers;
+  pointers.reserve(strings.size() + 1);
+  for (const std::string& text : strings) pointers.push_back(const_cast<char*>(text.c_str()));
+  pointers.push_back(nullptr);
+  return pointers;
 }
 
 }  // namespace
 
 ChildProcess::ChildProcess(const std::vector<std::string>& argv, const ChildOptions& options) {
   if (argv.empty()) throw std::runtime_error("ChildProcess: no program given");
-  std::vector<char*> args;
-  args.reserve(argv.size() + 1);
-  for (const std::string& arg : argv) args.push_back(const_cast<char*>(arg.c_str()));
-  args.push_back(nullptr);
+  const std::vector<char*> args = ExecArray(argv);
+  const std::vector<std::string> environment_entries = ChildEnvironment(options.environment);
+  const std::vector<char*> environment = ExecArray(environment_entries);
   if (!options.log_file.empty()) log_.open(options.log_file, std::ios::app);
   const Pipe out = MakePipe();
   const Pipe exec_error = MakePipe();
   const pid_t parent = getpid();
   pid_ = fork();
   if (pid_ < 0) throw std::runtime_error("fork() failed");
-  if (pid_ == 0) ExecChild(args.data(), options, out, exec_error.write, parent);
+  if (pid_ == 0) {
+    ExecChild(args.data(), environment.data(), options, out, exec_error.write, parent);
+  }
   if (options.own_process_group) setpgid(pid_, pid_);  // either side may be first
   close(out.write);
   close(exec_error.write);
   out_fd_ = out.read;
-  const int error = ExecError(exec_error.read);
+  const ChildError failure = ReadChildError(exec_error.read);
   close(exec_error.read);
-  if (error != 0) {
+  if (failure.error != 0) {
     waitpid(pid_, nullptr, 0);
     pid_ = -1;
-    throw std::runtime_error("cannot start '" + argv[0] + "': " + std::strerror(error));
+    throw std::runtime_error("cannot start '" + argv[0] + "': " + Describe(failure));
   }
 }
 

@@ -11,6 +11,7 @@
 #include <fstream>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace shapesense {
@@ -30,12 +31,21 @@ struct ChildOptions {
   // privileges; refused, the child runs at normal priority and its output
   // starts with a line that says so.
   int nice = 0;
+  // A network namespace (an open fd, e.g. VirtualHosts::NamespaceFd) the
+  // child enters before exec; -1: the parent's.
+  int network_namespace = -1;
+  // When set, the child gets a UTS namespace of its own with this host name,
+  // so that gethostname() in the program names its (virtual) host.
+  std::string host_name = {};
+  // Variables set in the child's environment (replacing the parent's).
+  std::vector<std::pair<std::string, std::string>> environment = {};
 };
 
 class ChildProcess {
  public:
   // Starts `argv[0]` (a path) with the arguments. Throws std::runtime_error
-  // naming the program when it cannot be started (missing, not executable).
+  // naming the program when it cannot be started (missing, not executable,
+  // its network namespace or host name refused) and the step that failed.
   explicit ChildProcess(const std::vector<std::string>& argv, const ChildOptions& options = {});
   ~ChildProcess();
   ChildProcess(const ChildProcess&) = delete;

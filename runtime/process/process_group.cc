@@ -50,6 +50,9 @@ void ProcessGroup::Launch(const ProgramSpec& process) {
   options.own_process_group = true;  // Ctrl-C reaches the demo, which stops them in order
   options.end_with_parent = true;
   options.nice = process.nice;
+  options.network_namespace = process.network_namespace;
+  options.host_name = process.host_name;
+  options.environment = process.environment;
   fs::remove(options.log_file);
   try {
     running_.push_back({process, std::make_unique<ChildProcess>(process.argv, options)});

@@ -12,6 +12,7 @@
 #include <memory>
 #include <stdexcept>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "runtime/process/child_process.h"
@@ -34,6 +35,12 @@ struct ProgramSpec {
   // a real-time process, where allowed (as root), so that another load on
   // the machine delays the measuring, not the exposures.
   int nice = 0;
+  // Where it runs (ChildOptions): a network namespace (-1: the launcher's),
+  // a host name of its own (empty: the launcher's), variables set in its
+  // environment. VirtualHosts::PlaceOn fills them for a virtual host.
+  int network_namespace = -1;
+  std::string host_name = {};
+  std::vector<std::pair<std::string, std::string>> environment = {};
 };
 
 // A program of the group failed: it could not start, ended early, or never

@@ -5,6 +5,7 @@
 // and a child that ends with the thread that started it.
 #include "runtime/process/child_process.h"
 
+#include <fcntl.h>
 #include <gtest/gtest.h>
 #include <signal.h>
 #include <sys/resource.h>
@@ -82,6 +83,38 @@ TEST(ChildProcessTest, AProgramThatCannotStartIsNamed) {
   } catch (const std::runtime_error& e) {
     EXPECT_NE(std::string(e.what()).find(missing), std::string::npos) << e.what();
   }
+}
+
+// A namespace fd that is none (here /dev/null) is refused by setns in the
+// child: the parent hears which step failed, not a bare exit status.
+TEST(ChildProcessTest, ANetworkNamespaceRefusedIsNamed) {
+  const int not_a_namespace = open("/dev/null", O_RDONLY | O_CLOEXEC);
+  ASSERT_GE(not_a_namespace, 0);
+  ChildOptions options;
+  options.network_namespace = not_a_namespace;
+  try {
+    ChildProcess child({"/bin/true"}, options);
+    FAIL() << "started in a network namespace that is none";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("/bin/true"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("setns"), std::string::npos) << e.what();
+  }
+  close(not_a_namespace);
+}
+
+TEST(ChildProcessTest, SetsTheEnvironmentAsked) {
+  setenv("SHAPESENSE_CHILD_TEST_KEPT", "parent", 1);
+  setenv("SHAPESENSE_CHILD_TEST_REPLACED", "parent", 1);
+  ChildOptions options;
+  options.environment = {{"SHAPESENSE_CHILD_TEST_REPLACED", "child"},
+                         {"SHAPESENSE_CHILD_TEST_ADDED", "-2.5"}};
+  ChildProcess child(Shell("echo $SHAPESENSE_CHILD_TEST_KEPT $SHAPESENSE_CHILD_TEST_REPLACED "
+                           "$SHAPESENSE_CHILD_TEST_ADDED; env | grep -c SHAPESENSE_CHILD_TEST_"),
+                     options);
+  EXPECT_EQ(WaitForEnd(child), 0);
+  EXPECT_EQ(child.output(), "parent child -2.5\n3\n") << "each variable once";
+  unsetenv("SHAPESENSE_CHILD_TEST_KEPT");
+  unsetenv("SHAPESENSE_CHILD_TEST_REPLACED");
 }
 
 TEST(ChildProcessTest, ExitStatusDoesNotWaitAndDescribesTheEnd) {
