@@ -2,23 +2,81 @@
 
 #include <unistd.h>
 
-#include <array>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
 
+#include "runtime/host_clock.h"
 #include "runtime/lcm/channels.h"
 
 namespace shapesense {
 namespace {
 
-std::string HostName() {
-  std::array<char, 256> name{};
-  if (gethostname(name.data(), name.size() - 1) != 0) return "unknown";
-  return name.data();
+// CPU time this process has used, s (/proc/self/stat: utime + stime).
+double ProcessCpuSeconds() {
+  std::ifstream stat("/proc/self/stat");
+  std::string text;
+  std::getline(stat, text);
+  // Fields after the command name (which may hold spaces) start past ')'.
+  const size_t close = text.rfind(')');
+  if (close == std::string::npos) return 0.0;
+  unsigned long user = 0;
+  unsigned long system = 0;
+  if (std::sscanf(text.c_str() + close + 1, " %*c %*d %*d %*d %*d %*d %*u %*u %*u %*u %*u %lu %lu",
+                  &user, &system) != 2) {
+    return 0.0;
+  }
+  return static_cast<double>(user + system) / static_cast<double>(sysconf(_SC_CLK_TCK));
+}
+
+int64_t ResidentBytes() {
+  std::ifstream statm("/proc/self/statm");
+  int64_t size = 0;
+  int64_t resident = 0;
+  statm >> size >> resident;
+  return resident * sysconf(_SC_PAGESIZE);
+}
+
+std::string ClockWarning(const std::vector<HostClockOffset>& offsets, double threshold_ms) {
+  std::string warning;
+  for (const HostClockOffset& offset : offsets) {
+    const double ms = static_cast<double>(offset.offset_us) * 1e-3;
+    if (std::abs(ms) <= threshold_ms) continue;
+    char text[160];
+    std::snprintf(text, sizeof(text), "%s%s's clock is %+.3f ms off this host's (> %.3g ms)",
+                  warning.empty() ? "" : "; ", offset.host.c_str(), ms, threshold_ms);
+    warning += text;
+  }
+  return warning;
 }
 
 }  // namespace
 
 ServiceStatus::ServiceStatus(std::string service)
-    : service_(std::move(service)), host_(HostName()) {}
+    : service_(std::move(service)),
+      host_(HostName()),
+      start_utime_(HostUtime()),
+      last_cpu_seconds_(ProcessCpuSeconds()) {}
+
+void ServiceStatus::FillProcess(service_status_t* status, int64_t now_utime) {
+  status->pid = static_cast<int32_t>(getpid());
+  status->uptime_s = static_cast<double>(now_utime - start_utime_) * 1e-6;
+  const double cpu = ProcessCpuSeconds();
+  const double wall = static_cast<double>(now_utime - last_cpu_utime_) * 1e-6;
+  if (last_cpu_utime_ > 0 && wall > 0) {
+    status->cpu_percent = static_cast<float>(100.0 * (cpu - last_cpu_seconds_) / wall);
+  }
+  status->rss_bytes = ResidentBytes();
+}
+
+void ServiceStatus::FillClocks(service_status_t* status,
+                               const std::vector<HostClockOffset>& offsets) {
+  status->num_clock_offsets = static_cast<int32_t>(offsets.size());
+  for (const HostClockOffset& offset : offsets) {
+    status->clock_offset_hosts.push_back(offset.host);
+    status->clock_offsets_us.push_back(offset.offset_us);
+  }
+}
 
 void ServiceStatus::Error(const std::string& what) {
   ++errors_;
@@ -53,6 +111,7 @@ service_status_t ServiceStatus::Snapshot(int64_t now_utime, int64_t bus_rejected
   status.errors = errors_;
   status.queue_depth = queue_depth_;
   status.last_error = last_error_;
+  FillProcess(&status, now_utime);
   return status;
 }
 
@@ -62,13 +121,32 @@ void ServiceStatus::MaybePublish(LcmBus& bus, int64_t now_utime, int64_t also_re
 }
 
 void ServiceStatus::Publish(LcmBus& bus, int64_t now_utime, int64_t also_rejected) {
-  const service_status_t status = Snapshot(now_utime, bus.Rejected() + also_rejected);
+  ListenToPeers(bus);
+  const std::vector<HostClockOffset> offsets = bus.clock_offsets().Snapshot();
+  const std::string warning = ClockWarning(offsets, clock_warning_ms_);
+  if (!warning.empty() && warning != last_clock_warning_) Note(warning);
+  last_clock_warning_ = warning;
+  service_status_t status = Snapshot(now_utime, bus.Rejected() + also_rejected);
+  FillClocks(&status, offsets);
+  status.clock_warning = warning;
   bus.Publish(channels::Status(service_), status);
+  last_cpu_utime_ = now_utime;
+  last_cpu_seconds_ = ProcessCpuSeconds();
   std::lock_guard lock(mutex_);
   ++seq_;
   last_utime_ = now_utime;
   last_received_ = status.received;
   last_published_ = status.published;
+}
+
+// Every program hears the others' status (1 Hz each): the traffic its
+// estimate of their clocks' offsets comes from, even when it reads nothing
+// else of theirs. The bus observes every message's host and times itself.
+void ServiceStatus::ListenToPeers(LcmBus& bus) {
+  if (listening_to_ == &bus) return;
+  listening_to_ = &bus;
+  bus.Subscribe<service_status_t>(channels::kStatusPattern,
+                                  [](service_status_t&&, const std::string&, int64_t) {});
 }
 
 }  // namespace shapesense

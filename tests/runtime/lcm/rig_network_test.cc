@@ -5,6 +5,8 @@
 // estimated from the traffic.
 #include <gtest/gtest.h>
 
+#include <unistd.h>
+
 #include <atomic>
 
 #include "runtime/lcm/channel_networks.h"
@@ -13,6 +15,7 @@
 #include "runtime/lcm/image_buses.h"
 #include "runtime/lcm/lcm_bus.h"
 #include "runtime/lcm/lcm_url.h"
+#include "runtime/lcm/service_status.h"
 #include "shapesense/image_t.hpp"
 #include "shapesense/shape_t.hpp"
 #include "shapesense/voxel_cloud_t.hpp"
@@ -209,6 +212,41 @@ TEST_F(RigNetworkTest, EveryMessageNamesItsHostAndFeedsTheReceiversClockOffsets)
   EXPECT_NEAR(static_cast<double>(offsets[1].offset_us), 300'000.0, 20'000.0);
   EXPECT_TRUE(alpha.clock_offsets().Snapshot().empty())
       << "its own messages are not another host's";
+}
+
+TEST_F(RigNetworkTest, StatusCarriesTheProcessAndEveryPeersClockOffsetAndWarnsPastAMillisecond) {
+  LcmBus beta(Options(kRig, kLocal, "", "beta"));
+  LcmBus gamma(Options(kRig, kLocal, "", "gamma"));
+  LcmBus listener(Options(kRig, kLocal, "", "listener"));
+  std::vector<service_status_t> heard;
+  listener.Subscribe<service_status_t>(
+      channels::Status("carving"),
+      [&](service_status_t&& status, const std::string&, int64_t) { heard.push_back(status); });
+  ServiceStatus status("carving");
+  status.Publish(beta, NowUtime());  // from now on it hears its peers
+  for (int i = 0; i < 5; ++i) {
+    service_status_t peer{};
+    peer.service = "controller";
+    peer.header.utime = NowUtime() + 5'000;  // gamma's clock: 5 ms ahead
+    ASSERT_TRUE(gamma.Publish(channels::Status("controller"), peer));
+  }
+  HandleUntil({&beta}, [&] { return beta.clock_offsets().OffsetOf("gamma").has_value(); });
+  HandleUntil(
+      {&beta}, [] { return false; }, 5);
+  status.Publish(beta, NowUtime());
+  HandleUntil({&listener}, [&] { return heard.size() >= 2; });
+  ASSERT_EQ(heard.size(), 2u);
+  const service_status_t& last = heard.back();
+  EXPECT_EQ(last.header.host, "beta");
+  EXPECT_EQ(last.pid, getpid());
+  EXPECT_GT(last.rss_bytes, 0);
+  EXPECT_GE(last.uptime_s, 0.0);
+  ASSERT_EQ(last.num_clock_offsets, 1) << "gamma's (its own is not another host's)";
+  EXPECT_EQ(last.clock_offset_hosts[0], "gamma");
+  EXPECT_NEAR(static_cast<double>(last.clock_offsets_us[0]), 5'000.0, 3'000.0);
+  EXPECT_NE(last.clock_warning.find("gamma's clock is +"), std::string::npos) << last.clock_warning;
+  EXPECT_EQ(last.last_error, last.clock_warning);
+  EXPECT_TRUE(heard.front().clock_warning.empty());
 }
 
 TEST_F(RigNetworkTest, ImageBusesHangOffTheLocalNetwork) {
