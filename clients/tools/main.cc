@@ -10,6 +10,7 @@
 #include "clients/tools/monitor/monitor_command.h"
 #include "clients/tools/offline_command.h"
 #include "clients/tools/replay/replay_command.h"
+#include "clients/tools/rig/rig_command.h"
 #include "libs/core/error.h"
 #include "runtime/command_line.h"
 
@@ -23,6 +24,7 @@ int main(int argc, char** argv) {
   shapesense::AddEstimateCommand(app);
   shapesense::AddMonitorCommand(app);
   shapesense::AddReplayCommand(app);
+  shapesense::AddRigCommand(app);
   // The subcommands run inside the parse (their callbacks), so their errors
   // come out of it too.
   try {

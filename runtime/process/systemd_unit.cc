@@ -153,11 +153,14 @@ void WriteScheduling(const UnitSpec& spec, std::ostream& out) {
 }
 
 void WriteServiceSection(const UnitSpec& spec, std::ostream& out) {
-  out << "[Service]\n"
-      << "Type=notify\n"
-      // Only the program itself may say ready or ping the watchdog, not a child it starts.
-      << "NotifyAccess=main\n"
-      << "ExecStart=" << Joined(spec.command, [](const std::string& w) { return Quote(w, true); })
+  out << "[Service]\n";
+  if (spec.notify) {
+    // Only the program itself may say ready or ping the watchdog, not a child it starts.
+    out << "Type=notify\nNotifyAccess=main\n";
+  } else {
+    out << "Type=simple\n";
+  }
+  out << "ExecStart=" << Joined(spec.command, [](const std::string& w) { return Quote(w, true); })
       << '\n';
   if (!spec.working_directory.empty()) {
     out << "WorkingDirectory=" << EscapeSpecifiers(spec.working_directory) << '\n';
@@ -168,8 +171,8 @@ void WriteServiceSection(const UnitSpec& spec, std::ostream& out) {
     assignment += value;
     out << "Environment=" << Quote(assignment, false) << '\n';
   }
-  out << "WatchdogSec=" << Span(spec.watchdog_s) << '\n'
-      << "TimeoutStartSec=" << Span(spec.start_timeout_s) << '\n'
+  if (spec.notify) out << "WatchdogSec=" << Span(spec.watchdog_s) << '\n';
+  out << "TimeoutStartSec=" << Span(spec.start_timeout_s) << '\n'
       << "Restart=on-failure\n"
       << "RestartSec=" << spec.restart_sec_ms << "ms\n";
   WriteScheduling(spec, out);

@@ -35,6 +35,9 @@ struct UnitSpec {
   std::vector<int> cpu_affinity;
   // 0: the normal scheduler; 1-99: SCHED_FIFO at this priority.
   int realtime_priority = 0;
+  // A shapesense program speaks the notify protocol (READY, WATCHDOG); a
+  // foreign one (lcm-logger) does not: Type=simple, no watchdog.
+  bool notify = true;
   // Units started before this one, besides network-online.target.
   std::vector<std::string> after_units;
 };
