@@ -33,7 +33,10 @@ const char* NetworkName(Network network) { return network == Network::kRig ? "ri
 ChannelNetworks::ChannelNetworks(const std::vector<ChannelRoute>& overrides) {
   for (const ChannelRoute& route : overrides) {
     rules_.emplace_back(Compile(route.pattern), route.network);
+    if (route.network == Network::kLocal) local_examples_.push_back(route.pattern);
   }
+  local_examples_.push_back(channels::Image("cam0"));
+  local_examples_.push_back(channels::Silhouette("cam0"));
   rules_.emplace_back(Compile(channels::kImagePattern), Network::kLocal);
   rules_.emplace_back(Compile(channels::kSilhouettePattern), Network::kLocal);
 }
@@ -43,6 +46,14 @@ Network ChannelNetworks::Of(const std::string& channel) const {
     if (std::regex_match(channel, pattern)) return network;
   }
   return Network::kRig;
+}
+
+bool ChannelNetworks::MayBeLocal(const std::string& pattern) const {
+  const std::regex expression = Compile(pattern);
+  for (const std::string& example : local_examples_) {
+    if (std::regex_match(example, expression)) return true;
+  }
+  return false;
 }
 
 std::vector<ChannelRoute> ChannelNetworks::Parse(const std::string& text) {

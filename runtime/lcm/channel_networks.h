@@ -34,6 +34,10 @@ class ChannelNetworks {
   explicit ChannelNetworks(const std::vector<ChannelRoute>& overrides = {});
 
   Network Of(const std::string& channel) const;
+  // Whether the regular expression `pattern` matches a channel that travels
+  // locally (a camera's images or silhouettes, an override's channel), so
+  // that a subscription to it must also listen on the local network.
+  bool MayBeLocal(const std::string& pattern) const;
 
   // Parses "CHANNEL=local,PATTERN=rig,..." (the rig file's and
   // SHAPESENSE_CHANNEL_NETWORKS' form). Throws std::invalid_argument naming
@@ -43,6 +47,7 @@ class ChannelNetworks {
 
  private:
   std::vector<std::pair<std::regex, Network>> rules_;
+  std::vector<std::string> local_examples_;  // channels that travel locally
 };
 
 // Whether `channel` is a plain name (no regular-expression characters), so

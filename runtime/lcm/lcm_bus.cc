@@ -82,9 +82,12 @@ lcm::LCM& LcmBus::PublishTarget(const std::string& channel) {
 std::vector<lcm::LCM*> LcmBus::Receivers(const std::string& channel) {
   const bool own_port = local_ && GroupAndPort(local_url_) != GroupAndPort(url_);
   if (!own_port) return {rig_.get()};
+  const bool local = IsPlainChannel(channel) ? networks_.Of(channel) == Network::kLocal
+                                             : networks_.MayBeLocal(channel);
+  if (!local) return {rig_.get()};
   local_receives_ = true;
-  if (!IsPlainChannel(channel)) return {rig_.get(), local_.get()};
-  return {networks_.Of(channel) == Network::kLocal ? local_.get() : rig_.get()};
+  return IsPlainChannel(channel) ? std::vector<lcm::LCM*>{local_.get()}
+                                 : std::vector<lcm::LCM*>{rig_.get(), local_.get()};
 }
 
 void LcmBus::SubscribeRaw(const std::string& channel, RawHandler handler) {

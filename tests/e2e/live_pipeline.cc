@@ -58,7 +58,9 @@ bool UnderSanitizers() {
 
 double LiveRate() { return UnderSanitizers() ? 5.0 : 30.0; }
 
-Recorder::Recorder(const std::string& url) : bus_(url) {
+Recorder::Recorder(const std::string& url) : Recorder(LcmBusOptions::FromEnvironment(url)) {}
+
+Recorder::Recorder(const LcmBusOptions& options) : bus_(options) {
   bus_.Subscribe<shape_t>(channels::kTruth,
                           [this](const shape_t& truth, const std::string&, int64_t) {
                             std::lock_guard lock(mutex_);
@@ -137,10 +139,36 @@ std::optional<service_status_t> Recorder::WaitForStatus(const std::string& servi
 
 LivePipeline::LivePipeline(const std::string& name, PipelineOptions options)
     : options_(std::move(options)),
-      dir_(fs::temp_directory_path() / ("shapesense_e2e_" + name + "_" + std::to_string(getpid()))),
-      recorder_(std::make_unique<Recorder>()) {
+      dir_(fs::temp_directory_path() /
+           ("shapesense_e2e_" + name + "_" + std::to_string(getpid()))) {
   fs::remove_all(dir_);
   fs::create_directories(dir_);
+  if (options_.hosts == nullptr) {
+    recorder_ = std::make_unique<Recorder>();
+    return;
+  }
+  // The recorder's sockets and threads belong to the camera host: made by
+  // a thread that has entered it.
+  std::thread([this] {
+    options_.hosts->EnterFromThisThread(kCameraHost);
+    LcmBusOptions bus;
+    bus.url = kRigUrl;
+    bus.local_url = ReceiverUrl();
+    recorder_ = std::make_unique<Recorder>(bus);
+  }).join();
+}
+
+ChildOptions LivePipeline::On(const std::string& host) const {
+  ChildOptions options;
+  if (options_.hosts == nullptr) return options;
+  options_.hosts->PlaceOn(host, &options);
+  options.environment.emplace_back("SHAPESENSE_LOCAL_LCM_URL", ReceiverUrl());
+  return options;
+}
+
+std::string LivePipeline::BusUrl(bool receives_images) const {
+  if (options_.hosts != nullptr) return kRigUrl;
+  return receives_images ? ReceiverUrl() : kLcmUrl;
 }
 
 LivePipeline::~LivePipeline() {
@@ -188,16 +216,18 @@ void LivePipeline::WriteRigFiles() {
 }
 
 std::unique_ptr<ChildProcess> LivePipeline::StartService(const std::string& binary,
-                                                         const fs::path& config) {
+                                                         const fs::path& config,
+                                                         const std::string& host) {
   return std::make_unique<ChildProcess>(
-      std::vector<std::string>{binary, "--config", config.string(), "--lcm-url", ReceiverUrl(),
-                               "--duration", kProcessBound});
+      std::vector<std::string>{binary, "--config", config.string(), "--lcm-url", BusUrl(true),
+                               "--duration", kProcessBound},
+      On(host));
 }
 
 std::string LivePipeline::StartServices() {
   std::vector<std::string> argv = {kNice,         "-n",
                                    "-10",         E2E_RIG_SIM,
-                                   "--lcm-url",   kLcmUrl,
+                                   "--lcm-url",   BusUrl(false),
                                    "--seed",      std::to_string(options_.seed),
                                    "--write-rig", (dir_ / "rig_sim_rig.yaml").string(),
                                    "--duration",  kProcessBound};
@@ -206,14 +236,14 @@ std::string LivePipeline::StartServices() {
     argv.push_back("--rig");
     argv.push_back(WriteSmallerRig().string());
   }
-  rig_sim_ = std::make_unique<ChildProcess>(argv);
+  rig_sim_ = std::make_unique<ChildProcess>(argv, On(kCameraHost));
   if (!rig_sim_->WaitForLine("rig-sim: ready", milliseconds(30000))) {
     return "the rig-sim did not start: " + rig_sim_->output();
   }
   WriteRigFiles();
   const int64_t started = NowUtime();
-  carving_ = StartService(E2E_CARVING, CarvingConfig());
-  shape_ = StartService(E2E_SHAPE, ShapeConfig());
+  carving_ = StartService(E2E_CARVING, CarvingConfig(), kCameraHost);
+  shape_ = StartService(E2E_SHAPE, ShapeConfig(), kShapeHost);
   // A service reports once its table is built and it listens.
   for (const char* service : {"carving", "shape"}) {
     if (!recorder_->WaitForStatus(service, started, milliseconds(120000))) {
@@ -268,9 +298,12 @@ void LivePipeline::WriteCaptureConfig() {
 void LivePipeline::StartCapture(double seconds) {
   WriteCaptureConfig();
   capture_start_utime_ = NowUtime();
-  capture_ = std::make_unique<ChildProcess>(std::vector<std::string>{
-      kNice, "-n", "-10", E2E_CAPTURE, "--config", (dir_ / "capture.yaml").string(), "--lcm-url",
-      kLcmUrl, "--rate", std::to_string(options_.rate_hz), "--duration", std::to_string(seconds)});
+  capture_ = std::make_unique<ChildProcess>(
+      std::vector<std::string>{kNice, "-n", "-10", E2E_CAPTURE, "--config",
+                               (dir_ / "capture.yaml").string(), "--lcm-url", BusUrl(false),
+                               "--rate", std::to_string(options_.rate_hz), "--duration",
+                               std::to_string(seconds)},
+      On(kCameraHost));
 }
 
 std::string LivePipeline::WaitForCapture(double seconds) {

@@ -21,6 +21,7 @@
 #include "libs/camera/camera.h"
 #include "runtime/lcm/lcm_bus.h"
 #include "runtime/process/child_process.h"
+#include "runtime/process/virtual_hosts.h"
 #include "shapesense/service_status_t.hpp"
 #include "shapesense/shape_t.hpp"
 
@@ -51,6 +52,7 @@ struct Received {
 class Recorder {
  public:
   explicit Recorder(const std::string& url = ReceiverUrl());
+  explicit Recorder(const LcmBusOptions& options);
   ~Recorder();
   Recorder(const Recorder&) = delete;
   Recorder& operator=(const Recorder&) = delete;
@@ -94,7 +96,17 @@ struct PipelineOptions {
   // The synthetic rig's image size (its focal length scaled with it).
   int image_width = 640;
   int image_height = 480;
+  // Two hosts (runtime/process/virtual_hosts.h) instead of one: the rig-sim,
+  // capture, carving and this test's recorder on kCameraHost, the shape
+  // service on kShapeHost, the rig network between them (kRigUrl, ttl=1)
+  // and the images on the camera host's local network. Null: one host.
+  const VirtualHosts* hosts = nullptr;
 };
+
+// The hosts of a two-host pipeline, and its rig network.
+inline constexpr const char* kCameraHost = "camera";
+inline constexpr const char* kShapeHost = "shape";
+inline constexpr const char* kRigUrl = "udpm://239.255.77.1:7701?ttl=1&recv_buf_size=4194304";
 
 // The programs of one run, in a folder of their own; every process is
 // stopped when the run goes away.
@@ -141,7 +153,12 @@ class LivePipeline {
   void WriteRigFiles();
   void WriteCaptureConfig();
   std::unique_ptr<ChildProcess> StartService(const std::string& binary,
-                                             const std::filesystem::path& config);
+                                             const std::filesystem::path& config,
+                                             const std::string& host);
+  // Where a program runs: its host's namespace, name, clock and networks.
+  ChildOptions On(const std::string& host) const;
+  // The URL every program is given: the rig network (two hosts) or the one bus.
+  std::string BusUrl(bool receives_images) const;
 
   PipelineOptions options_;
   std::filesystem::path dir_;

@@ -1,11 +1,20 @@
 #include "clients/tools/rig/rig_command.h"
 
+#include <unistd.h>
+
+#include <chrono>
 #include <iostream>
+#include <optional>
+#include <stdexcept>
 
 #include "libs/core/error.h"
 #include "runtime/command_line.h"
 #include "runtime/file_io.h"
+#include "runtime/lcm/channels.h"
+#include "runtime/lcm/lcm_bus.h"
+#include "runtime/process/signal_thread.h"
 #include "runtime/rig/rig_check.h"
+#include "runtime/rig/rig_status.h"
 #include "runtime/rig/rig_units.h"
 
 namespace shapesense {
@@ -22,7 +31,53 @@ std::filesystem::path OwnFolder() {
   return error ? std::filesystem::path("/usr/local/bin") : self.parent_path();
 }
 
+LcmBusOptions StatusBusOptions(const RigStatusArgs& args, const std::optional<RigFile>& rig) {
+  LcmBusOptions options = LcmBusOptions::FromEnvironment(args.lcm_url);
+  if (rig && args.lcm_url.empty()) {
+    options.url = rig->rig_network;
+    options.local_url = rig->local_network;
+    options.prefix = rig->prefix;
+    options.routes = rig->channels;
+  }
+  return options;
+}
+
+// Handles the bus until `until` (µs, this host's clock) or a stop.
+void Listen(LcmBus& bus, int64_t until, const std::atomic<bool>& stop) {
+  while (!stop.load() && NowUtime() < until) bus.Handle(50);
+}
+
 }  // namespace
+
+int RunRigStatus(const RigStatusArgs& args, const std::atomic<bool>& stop, std::ostream& out) {
+  std::optional<RigFile> rig;
+  if (!args.rig.empty()) rig = ReadRig(args.rig);
+  RigStatusBoard board(rig);
+  LcmBus bus(StatusBusOptions(args, rig));
+  bus.Subscribe<service_status_t>(
+      channels::kStatusPattern,
+      [&](service_status_t&& status, const std::string&, int64_t receive_utime) {
+        board.Observe(status, receive_utime);
+      });
+  bus.Subscribe<shape_t>(channels::kShape, [&](shape_t&& shape, const std::string&, int64_t) {
+    board.Observe(shape);
+  });
+  const int64_t start = NowUtime();
+  // Two status periods: every running program has spoken at least once.
+  constexpr int64_t kFirstLook = 2'500'000;
+  Listen(bus, start + kFirstLook, stop);
+  const bool live = !args.once;
+  const bool terminal = isatty(STDOUT_FILENO) != 0 && &out == &std::cout;
+  while (true) {
+    const int64_t now = NowUtime();
+    if (terminal && live) out << "\x1b[H\x1b[2J";  // redraw in place
+    out << (args.json ? board.Json(now) + "\n" : board.Table(now)) << std::flush;
+    const bool over =
+        args.duration_s > 0 && now - start >= static_cast<int64_t>(args.duration_s * 1e6);
+    if (!live || stop.load() || over) return board.Complete(now) ? 0 : 1;
+    Listen(bus, now + 1'000'000, stop);
+  }
+}
 
 int RunRigCheck(const std::vector<std::filesystem::path>& files, std::ostream& out) {
   std::vector<RigFile> rigs;
@@ -96,6 +151,21 @@ void AddRigCommand(CLI::App& app) {
     for (const std::string& problem : problems) std::cerr << "  " << problem << '\n';
     if (!problems.empty()) throw InputError("the rig file has problems (listed above): no units");
     RunRigUnits(units_file, units_host, units_out, units_bin, std::cout);
+  });
+
+  static RigStatusArgs status_args;
+  CLI::App* status = rig_app->add_subcommand(
+      "status", "every program of every host: up, stale or missing, with its health");
+  status->add_option("--rig", status_args.rig, "rig file: the programs expected")
+      ->check(CLI::ExistingFile);
+  status->add_option("--lcm-url", status_args.lcm_url,
+                     "the rig network (default: the rig file's, else LCM_DEFAULT_URL)");
+  status->add_flag("--once", status_args.once, "listen 2.5 s, print once, exit");
+  status->add_flag("--json", status_args.json, "JSON instead of a table");
+  status->add_option("--duration", status_args.duration_s, "live: stop after this, s (0: Ctrl-C)");
+  status->callback([] {
+    const int code = RunRigStatus(status_args, StopFlagOnSignals(), std::cout);
+    if (code != 0) throw std::runtime_error("an expected program is missing or stale (above)");
   });
 }
 

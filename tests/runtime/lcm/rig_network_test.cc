@@ -53,6 +53,10 @@ TEST(ChannelNetworksTest, ImagesStayLocalAndEverythingElseTakesTheRigNetwork) {
     EXPECT_EQ(networks.Of(channel), Network::kRig) << channel;
   }
   EXPECT_EQ(networks.Of(channels::Status("carving")), Network::kRig);
+  // Patterns: listened for locally only when they may match a local channel.
+  EXPECT_TRUE(networks.MayBeLocal(channels::kImagePattern));
+  EXPECT_TRUE(networks.MayBeLocal(".*"));
+  EXPECT_FALSE(networks.MayBeLocal(channels::kStatusPattern));
 }
 
 TEST(ChannelNetworksTest, OverridesComeFirstAndParseBackFromText) {
