@@ -8,8 +8,8 @@
 // with all channels on one port the shape service, the controller and every
 // monitor would pay for each image. Each camera's channel therefore gets its
 // own port on the host-local network (lcm_bus.h), its port + 1 + the
-// camera's index in the rig (the group and the options stay the network's): only the capture service that publishes a
-// camera's images and the processes that use them (the carving service, a
+// camera's index in the rig (the group and the options stay the network's): only the capture
+// service that publishes a camera's images and the processes that use them (the carving service, a
 // logger of images) listen there. The kernel sorts datagrams to sockets by
 // port, so a process never sees another port's traffic. (A different group
 // on the same port would not do: Linux delivers a group's datagrams to every
