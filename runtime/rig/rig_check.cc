@@ -16,6 +16,7 @@ namespace ch = channels;
 std::vector<std::string> PerCamera(std::string (*channel)(const std::string&),
                                    const std::vector<std::string>& cameras) {
   std::vector<std::string> names;
+  names.reserve(cameras.size());
   for (const std::string& camera : cameras) names.push_back(channel(camera));
   return names;
 }
@@ -183,7 +184,7 @@ std::vector<std::string> CheckRig(const RigFile& rig) {
   CheckNetworks(rig, &problems);
   CheckHosts(rig, &problems);
   CheckChannels(rig, &problems);
-  for (std::string& problem : problems) problem = source + problem;
+  for (std::string& problem : problems) problem.insert(0, source);
   return problems;
 }
 

@@ -69,7 +69,10 @@ std::vector<ChannelRoute> ParseChannels(const Reader& reader, const YAML::Node& 
     const std::string channel = item.first.as<std::string>();
     const std::string network = item.second.as<std::string>();
     try {
-      const std::vector<ChannelRoute> parsed = ChannelNetworks::Parse(channel + "=" + network);
+      std::string route = channel;
+      route += '=';
+      route += network;
+      const std::vector<ChannelRoute> parsed = ChannelNetworks::Parse(route);
       routes.insert(routes.end(), parsed.begin(), parsed.end());
     } catch (const std::invalid_argument& error) {
       reader.Fail("rig.channels." + channel, error.what());

@@ -76,6 +76,7 @@ std::vector<RigStatusRow> RigStatusBoard::Rows(int64_t now_utime) const {
       if (!service.empty()) expected.insert({host.name, service});
     }
   }
+  rows.reserve(expected.size() + heard_.size());
   for (const auto& key : expected) {
     rows.push_back({key.first, key.second, ProgramState::kMissing, std::nullopt, 0.0});
   }

@@ -88,8 +88,8 @@ TEST(ClockOffsetsTest, TheSmallestDelayGivesTheOffsetAndASteppedClockIsFollowed)
   // beta's clock is 500 ms ahead of ours; transit 100 µs plus up to 5 ms of queueing.
   const int64_t ahead = 500'000;
   for (int i = 0; i < 50; ++i) {
-    const int64_t ours = 1'000'000'000 + i * 20'000;
-    offsets.Observe("beta", ours + ahead - 100 - (i % 7) * 700, ours);
+    const int64_t ours = 1'000'000'000 + int64_t{i} * 20'000;
+    offsets.Observe("beta", ours + ahead - 100 - int64_t{i % 7} * 700, ours);
   }
   std::vector<HostClockOffset> seen = offsets.Snapshot();
   ASSERT_EQ(seen.size(), 1u);
@@ -99,7 +99,7 @@ TEST(ClockOffsetsTest, TheSmallestDelayGivesTheOffsetAndASteppedClockIsFollowed)
   // beta's clock is stepped back by a second: within two half windows the
   // estimate follows.
   for (int i = 50; i < 150; ++i) {
-    const int64_t ours = 1'000'000'000 + i * 20'000;
+    const int64_t ours = 1'000'000'000 + int64_t{i} * 20'000;
     offsets.Observe("beta", ours + ahead - 1'000'000 - 100, ours);
   }
   seen = offsets.Snapshot();
