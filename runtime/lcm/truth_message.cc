@@ -37,6 +37,9 @@ shape_t FrameSetTruth(const TubeScene& scene, const TrajectoryPose& pose, int64_
   shape_t shape{};
   shape.header.seq = header_seq;
   shape.header.utime = publish_utime;
+  // Both times are the virtual rig's clock: what a receiver on another host
+  // dates the truth by (header_t.data_age_us).
+  shape.header.data_age_us = std::max<int64_t>(0, publish_utime - trigger_utime);
   shape.trigger_seq = trigger_seq;
   shape.trigger_utime = trigger_utime;
   shape.valid = true;

@@ -108,8 +108,10 @@ class ExperimentListener {
  public:
   ExperimentListener(LcmBus& bus, DemoScorer& scorer, SafetyEnvelope envelope)
       : scorer_(scorer), envelope_(std::move(envelope)), audit_(envelope_) {
-    bus.Subscribe<shape_t>(
-        channels::kTruth, [this](shape_t&& truth, const std::string&, int64_t) { OnTruth(truth); });
+    bus.Subscribe<shape_t>(channels::kTruth,
+                           [this](shape_t&& truth, const std::string&, int64_t receive_utime) {
+                             OnTruth(truth, receive_utime);
+                           });
     bus.Subscribe<shape_t>(channels::kShape, [this](shape_t&& shape, const std::string&,
                                                     int64_t utime) { OnShape(shape, utime); });
     bus.Subscribe<tendon_command_t>(
@@ -151,10 +153,13 @@ class ExperimentListener {
   }
 
  private:
-  void OnTruth(const shape_t& truth) {
+  // The truth is dated on this clock (its receive time less its age), as the
+  // targets are: never by the virtual rig's trigger time, which is another
+  // host's clock on a rig of several.
+  void OnTruth(const shape_t& truth, int64_t receive_utime) {
     scorer_.AddTruth(truth);
     const std::optional<Configuration> q = MessageConfiguration(truth);
-    if (run_ != nullptr && q) truth_.emplace_back(truth.trigger_utime, *q);
+    if (run_ != nullptr && q) truth_.emplace_back(receive_utime - truth.header.data_age_us, *q);
   }
   void OnShape(const shape_t& shape, int64_t utime) {
     scorer_.AddShape(shape, utime);
