@@ -48,6 +48,14 @@ LcmBusOptions LcmBusOptions::FromEnvironment(const std::string& url) {
   options.url = url;
   options.local_url = Environment("SHAPESENSE_LOCAL_LCM_URL");
   options.prefix = Environment("SHAPESENSE_RIG_PREFIX");
+  if (const std::string ms = Environment("SHAPESENSE_CLOCK_WARNING_MS"); !ms.empty()) {
+    char* end = nullptr;
+    options.clock_warning_ms = std::strtod(ms.c_str(), &end);
+    if (*end != 0 || !(options.clock_warning_ms > 0)) {
+      throw std::invalid_argument("SHAPESENSE_CLOCK_WARNING_MS='" + ms +
+                                  "': expected a positive number of milliseconds");
+    }
+  }
   try {
     options.routes = ChannelNetworks::Parse(Environment("SHAPESENSE_CHANNEL_NETWORKS"));
   } catch (const std::invalid_argument& error) {
@@ -105,7 +113,10 @@ void LcmBus::Raw::OnRawStatic(const lcm::ReceiveBuffer* buffer, const std::strin
   const std::span<const uint8_t> bytes(static_cast<const uint8_t*>(buffer->data),
                                        buffer->data_size);
   const std::string& prefix = self->bus->options_.prefix;
-  const std::string unprefixed = channel.substr(std::min(prefix.size(), channel.size()));
+  // No copy of the name per message (an image's too) without a prefix.
+  std::string stripped;
+  if (!prefix.empty()) stripped = channel.substr(std::min(prefix.size(), channel.size()));
+  const std::string& unprefixed = prefix.empty() ? channel : stripped;
   // LCM stamps receipt with the system clock; this host's clock may carry
   // the tests' offset.
   const int64_t receive_utime = buffer->recv_utime + TestClockOffsetUs();

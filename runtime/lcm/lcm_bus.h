@@ -29,9 +29,12 @@ struct LcmBusOptions {
   std::string prefix;
   std::vector<ChannelRoute> routes;  // before the defaults
   std::string host;                  // empty: this host's name
+  // Another host's clock further off than this is warned of in the status, ms.
+  double clock_warning_ms = 1.0;
 
   // `url` with the rest from the environment: SHAPESENSE_LOCAL_LCM_URL,
-  // SHAPESENSE_RIG_PREFIX, SHAPESENSE_CHANNEL_NETWORKS (what a rig's unit
+  // SHAPESENSE_RIG_PREFIX, SHAPESENSE_CHANNEL_NETWORKS,
+  // SHAPESENSE_CLOCK_WARNING_MS (what a rig's unit
   // files set: `shapesense rig units`). Throws std::invalid_argument naming
   // the variable on a bad value.
   static LcmBusOptions FromEnvironment(const std::string& url = {});

@@ -123,10 +123,11 @@ void ServiceStatus::MaybePublish(LcmBus& bus, int64_t now_utime, int64_t also_re
 void ServiceStatus::Publish(LcmBus& bus, int64_t now_utime, int64_t also_rejected) {
   ListenToPeers(bus);
   const std::vector<HostClockOffset> offsets = bus.clock_offsets().Snapshot();
-  const std::string warning = ClockWarning(offsets, clock_warning_ms_);
+  const std::string warning = ClockWarning(offsets, bus.options().clock_warning_ms);
   if (!warning.empty() && warning != last_clock_warning_) Note(warning);
   last_clock_warning_ = warning;
   service_status_t status = Snapshot(now_utime, bus.Rejected() + also_rejected);
+  status.host = bus.host();  // the name its messages carry
   FillClocks(&status, offsets);
   status.clock_warning = warning;
   bus.Publish(channels::Status(service_), status);

@@ -36,10 +36,6 @@ class ServiceStatus {
   // The message as it would be published now (for tests and logs).
   service_status_t Snapshot(int64_t now_utime, int64_t bus_rejected = 0);
 
-  // Past this offset of another host's clock, the status warns (and says
-  // so as its last error once), ms.
-  void SetClockWarningThreshold(double ms) { clock_warning_ms_ = ms; }
-
   int64_t received() const { return received_; }
   int64_t published() const { return published_; }
   int64_t dropped() const { return dropped_; }
@@ -55,7 +51,6 @@ class ServiceStatus {
   int64_t start_utime_ = 0;
   int64_t last_cpu_utime_ = 0;
   double last_cpu_seconds_ = 0.0;
-  double clock_warning_ms_ = 1.0;
   std::string last_clock_warning_;
   const LcmBus* listening_to_ = nullptr;
   std::atomic<int64_t> received_{0}, published_{0}, dropped_{0}, rejected_{0}, errors_{0};

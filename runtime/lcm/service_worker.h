@@ -53,6 +53,12 @@ class ServiceWorker {
   }
 
   int depth() const { return static_cast<int>(queue_.Size()); }
+  // Whether one job has held the worker for longer than `limit` (a hang,
+  // which a watchdog should see: SystemdNotifier::SetHealthCheck).
+  bool BusyLongerThan(std::chrono::microseconds limit) const {
+    const int64_t since = busy_since_us_.load();
+    return since != 0 && SteadyUs() - since > limit.count();
+  }
 
  private:
   void Run() {
@@ -60,11 +66,13 @@ class ServiceWorker {
       std::optional<Job> job = queue_.Pop(std::chrono::milliseconds(100));
       if (!job) continue;
       status_.SetQueueDepth(static_cast<int>(queue_.Size()));
+      busy_since_us_ = SteadyUs();
       try {
         process_(*job);
       } catch (const std::exception& e) {
         status_.Error(describe_(*job) + ": " + e.what());
       }
+      busy_since_us_ = 0;
     }
   }
 
@@ -73,8 +81,15 @@ class ServiceWorker {
   const std::string job_kind_;
   const Describe describe_;
   const Process process_;
+  static int64_t SteadyUs() {
+    return std::chrono::duration_cast<std::chrono::microseconds>(
+               std::chrono::steady_clock::now().time_since_epoch())
+        .count();
+  }
+
   std::atomic<bool> stopping_{false};
-  std::thread thread_;  // last: starts once everything above exists
+  std::atomic<int64_t> busy_since_us_{0};  // steady µs the current job started; 0: idle
+  std::thread thread_;                     // last: starts once everything above exists
 };
 
 }  // namespace shapesense

@@ -27,7 +27,7 @@ void SystemdNotifier::Ready(const std::string& status) { Send("READY=1\nSTATUS="
 void SystemdNotifier::Watchdog() {
   if (watchdog_timeout_.count() <= 0) return;
   const auto now = std::chrono::steady_clock::now();
-  if (now < next_watchdog_) return;
+  if (now < next_watchdog_ || (healthy_ && !healthy_())) return;
   next_watchdog_ = now + watchdog_timeout_ / 2;
   Send("WATCHDOG=1");
 }

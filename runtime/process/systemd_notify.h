@@ -5,6 +5,7 @@
 // sd_notify; does nothing when NOTIFY_SOCKET is unset (not under systemd,
 // or in a test), so the services call it unconditionally.
 #include <chrono>
+#include <functional>
 #include <string>
 
 namespace shapesense {
@@ -28,6 +29,10 @@ class SystemdNotifier {
   // that does the work: when that loop hangs, the pings stop and systemd
   // restarts the service.
   void Watchdog();
+  // A check Watchdog asks before each ping: a service whose work runs on
+  // another thread than its loop (a worker) says there whether that thread
+  // is stuck, so that a hung worker also stops the pings.
+  void SetHealthCheck(std::function<bool()> healthy) { healthy_ = std::move(healthy); }
   // STATUS=text, shown by `systemctl status`.
   void Status(const std::string& status);
   // STOPPING=1, once: the service is going down on purpose.
@@ -40,6 +45,7 @@ class SystemdNotifier {
   std::chrono::microseconds watchdog_timeout_{0};
   std::chrono::steady_clock::time_point next_watchdog_{};
   bool stopping_sent_ = false;
+  std::function<bool()> healthy_;
 };
 
 }  // namespace shapesense

@@ -180,6 +180,9 @@ std::vector<std::string> CheckRig(const RigFile& rig) {
     problems.push_back("rig.prefix '" + rig.prefix + "': only letters, digits and '_'");
   }
   if (rig.cameras.empty()) problems.push_back("rig.cameras: none");
+  if (!(rig.clock_offset_warning_ms > 0)) {
+    problems.push_back("rig.clock_offset_warning_ms: expected a positive number of ms");
+  }
   if (rig.hosts.empty()) problems.push_back("hosts: none");
   CheckNetworks(rig, &problems);
   CheckHosts(rig, &problems);

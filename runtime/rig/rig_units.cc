@@ -1,6 +1,7 @@
 #include "runtime/rig/rig_units.h"
 
 #include <algorithm>
+#include <cstdio>
 #include <stdexcept>
 
 #include "runtime/process/systemd_unit.h"
@@ -62,6 +63,9 @@ std::vector<std::pair<std::string, std::string>> RigEnvironment(const RigFile& r
       {"SHAPESENSE_LOCAL_LCM_URL", rig.local_network},
   };
   if (!rig.prefix.empty()) environment.emplace_back("SHAPESENSE_RIG_PREFIX", rig.prefix);
+  char warning[32];
+  std::snprintf(warning, sizeof(warning), "%g", rig.clock_offset_warning_ms);
+  environment.emplace_back("SHAPESENSE_CLOCK_WARNING_MS", warning);
   if (!rig.channels.empty()) {
     environment.emplace_back("SHAPESENSE_CHANNEL_NETWORKS", ChannelNetworks::Format(rig.channels));
   }

@@ -23,7 +23,8 @@ std::vector<UnitFile> UnitsForHost(const RigFile& rig, const std::string& host,
                                    const std::filesystem::path& bin_dir);
 
 // The environment every program of the rig runs with (LCM_DEFAULT_URL,
-// SHAPESENSE_LOCAL_LCM_URL, SHAPESENSE_RIG_PREFIX, SHAPESENSE_CHANNEL_NETWORKS).
+// SHAPESENSE_LOCAL_LCM_URL, SHAPESENSE_RIG_PREFIX, SHAPESENSE_CHANNEL_NETWORKS,
+// SHAPESENSE_CLOCK_WARNING_MS).
 std::vector<std::pair<std::string, std::string>> RigEnvironment(const RigFile& rig);
 
 }  // namespace shapesense

@@ -248,6 +248,9 @@ service_status_t RunCarvingService(const ServiceArgs& args, const std::atomic<bo
       << (options.lcm_url.empty() ? "LCM's default" : options.lcm_url) << '\n';
   // Ready only now: the table is built and the images subscribed to.
   SystemdNotifier supervisor;
+  // The loop pings; the carving runs on the worker, which must not hang either.
+  supervisor.SetHealthCheck(
+      [&] { return !service.WorkerBusyLongerThan(supervisor.watchdog_timeout() / 2); });
   supervisor.Ready("carving frame-sets");
   RunBusLoop(
       service.Buses(), stop, args.duration_s, [&](int64_t now) { service.Poll(now); }, supervisor);

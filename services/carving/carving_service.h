@@ -91,6 +91,10 @@ class CarvingService {
 
   // The status as it would be published now.
   service_status_t Status(int64_t now_utime);
+  // Whether the worker has been on one job for longer than `limit` (hung).
+  bool WorkerBusyLongerThan(std::chrono::microseconds limit) const {
+    return worker_.BusyLongerThan(limit);
+  }
   // The buses to handle: the one given and the cameras' image buses
   // (runtime/lcm/image_buses.h), all on the same thread.
   std::vector<LcmBus*> Buses() const;

@@ -240,6 +240,9 @@ service_status_t RunShapeService(const ServiceArgs& args, const std::atomic<bool
       << (options.shape.refine_with_silhouettes ? ", refining against the silhouettes" : "")
       << (options.configuration.enabled ? ", sensing the configuration q" : "") << '\n';
   SystemdNotifier supervisor;
+  // The loop pings; the estimate runs on the worker, which must not hang either.
+  supervisor.SetHealthCheck(
+      [&] { return !service.WorkerBusyLongerThan(supervisor.watchdog_timeout() / 2); });
   supervisor.Ready("measuring shapes");
   RunBusLoop(
       bus, stop, args.duration_s, [&](int64_t now) { service.Poll(now); }, supervisor);

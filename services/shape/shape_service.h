@@ -112,6 +112,10 @@ class ShapeService {
   // old silhouettes, publishes the status when due. Call from the bus's thread.
   void Poll(int64_t now_utime);
   service_status_t Status(int64_t now_utime);
+  // Whether the worker has been on one job for longer than `limit` (hung).
+  bool WorkerBusyLongerThan(std::chrono::microseconds limit) const {
+    return worker_.BusyLongerThan(limit);
+  }
 
  private:
   struct Job {

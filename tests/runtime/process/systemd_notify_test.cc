@@ -85,6 +85,27 @@ TEST(SystemdNotifier, PingsAtMostEveryHalfPeriodHoweverOftenCalled) {
   EXPECT_LE(pings, 11);
 }
 
+TEST(SystemdNotifier, AnUnhealthyWorkerStopsThePingsUntilItRecovers) {
+  NotifySocket socket(kWatchdogUsec);
+  SystemdNotifier notifier;
+  bool healthy = false;
+  notifier.SetHealthCheck([&] { return healthy; });
+  const auto run_for = [&](milliseconds span) {
+    const auto start = std::chrono::steady_clock::now();
+    while (std::chrono::steady_clock::now() - start < span) {
+      notifier.Watchdog();
+      std::this_thread::sleep_for(milliseconds(1));
+    }
+  };
+  run_for(milliseconds(500));  // 2.5 watchdog periods
+  notifier.Status("sick");
+  ASSERT_TRUE(socket.WaitFor("STATUS=sick", milliseconds(5000)));
+  EXPECT_EQ(socket.Transcript(), "STATUS=sick\n") << "no ping while unhealthy";
+  healthy = true;
+  run_for(milliseconds(10));
+  EXPECT_TRUE(socket.WaitFor("WATCHDOG=1", milliseconds(5000)));
+}
+
 TEST(SystemdNotifier, SaysStoppingOnce) {
   NotifySocket socket;
   SystemdNotifier notifier;

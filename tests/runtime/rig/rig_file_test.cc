@@ -132,6 +132,7 @@ TEST(RigFileTest, EveryHostsUnitsPassSystemdAnalyzeVerify) {
       std::ofstream(folder / unit.file_name) << unit.text;
       EXPECT_NE(unit.text.find("Environment=\"LCM_DEFAULT_URL=" + rig.rig_network),
                 std::string::npos);
+      EXPECT_NE(unit.text.find("Environment=\"SHAPESENSE_CLOCK_WARNING_MS=1\""), std::string::npos);
       int status = 0;
       const std::string said = RunCommand(
           "/usr/bin/systemd-analyze verify '" + (folder / unit.file_name).string() + "'", &status);
