@@ -75,6 +75,8 @@ class LcmBus {
     }
     return PublishNamed(channel, message);
   }
+  // A const message without a host is copied to be named: publish a
+  // mutable one where it is large (an image).
   template <class Message>
   bool Publish(const std::string& channel, const Message& message) {
     if constexpr (kHasHeader<Message>) {

@@ -82,8 +82,10 @@ class CaptureService {
   CaptureSummary Run(const std::atomic<bool>& stop);
 
  private:
+  // A mutable message, so that the bus names this host in it in place (a
+  // const one it would copy first: ~1 MB for an image).
   template <class Message>
-  bool Publish(const std::string& channel, const Message& message, LcmBus* bus = nullptr) {
+  bool Publish(const std::string& channel, Message&& message, LcmBus* bus = nullptr) {
     std::lock_guard lock(publish_mutex_);
     return (bus != nullptr ? *bus : bus_).Publish(channel, message);
   }
@@ -205,8 +207,8 @@ void CaptureService::PublishFrame(CameraSlot& slot, const CameraFrame& frame) {
     status_.Error(slot.config.name + ": dropped an image of the wrong size");
     return;
   }
-  const image_t message = ToImageMessage(slot.config.name, frame, slot.published, NowUtime(),
-                                         compression_, options_.png_level);
+  image_t message = ToImageMessage(slot.config.name, frame, slot.published, NowUtime(),
+                                   compression_, options_.png_level);
   if (!Publish(channels::Image(slot.config.name), message, slot.image_bus)) {
     status_.Error(slot.config.name + ": LCM publish failed");
     return;
