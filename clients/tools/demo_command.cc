@@ -7,6 +7,7 @@
 #include <memory>
 
 #include "clients/tools/demo/closed_loop_experiment.h"
+#include "clients/tools/demo/demo_hosts.h"
 #include "clients/tools/demo/live_demo.h"
 #include "clients/tools/demo/offline_demo.h"
 #include "libs/core/error.h"
@@ -29,6 +30,9 @@ struct DemoCommandArgs {
   std::string network = "auto";
   std::string cameras = "auto";
   bool no_replay = false;
+  int hosts = 1;
+  double camera_clock_offset_ms = 0.0;
+  bool faults = false;
 };
 
 NetworkMode ParseNetwork(const std::string& network) {
@@ -82,6 +86,16 @@ void RunLive(DemoCommandArgs& args) {
   if (report.interrupted) throw CLI::RuntimeError(130);
 }
 
+// The experiment's options from the command's, on `network`.
+ExperimentArgs& ExperimentOptions(DemoCommandArgs& args, const std::string& network) {
+  ExperimentArgs& experiment = args.experiment;
+  experiment.out = args.live.out;
+  experiment.rate_hz = args.live.rate_hz;
+  experiment.seed = args.live.seed;
+  experiment.network = network;
+  return experiment;
+}
+
 // The plant lives in the rig-sim, whose cameras need the namespace's addresses.
 void RunExperiment(DemoCommandArgs& args) {
   const NetworkChoice network = EnterNetwork(ParseNetwork(args.network), kLoopbackAddresses);
@@ -94,11 +108,22 @@ void RunExperiment(DemoCommandArgs& args) {
         " (run as root, or allow unprivileged user namespaces; `shapesense demo "
         "--pipeline` runs the sensing alone without one)");
   }
-  ExperimentArgs& experiment = args.experiment;
-  experiment.out = args.live.out;
-  experiment.rate_hz = args.live.rate_hz;
-  experiment.seed = args.live.seed;
-  experiment.network = "private network namespace";
+  ExperimentArgs& experiment = ExperimentOptions(args, "private network namespace");
+  const ExperimentReport report = RunClosedLoopExperiment(experiment, stop, std::cout);
+  if (report.interrupted) throw CLI::RuntimeError(130);
+}
+
+// Three hosts (network namespaces on a bridge) inside the private namespace,
+// made before any thread starts (each `ip` is a fork).
+void RunExperimentOnHosts(DemoCommandArgs& args) {
+  const NetworkChoice network = EnterNetwork(NetworkMode::kPrivate, kLoopbackAddresses);
+  if (!network.private_namespace) throw InputError("--hosts 3: " + network.why_not);
+  const VirtualHosts hosts(DemoHostSpecs(args.camera_clock_offset_ms, kLoopbackAddresses));
+  const std::atomic<bool>& stop = StopFlagOnSignals();
+  ExperimentArgs& experiment =
+      ExperimentOptions(args, "three hosts (network namespaces on a bridge)");
+  experiment.hosts = &hosts;
+  if (args.faults) experiment.faults = StandardFaults(experiment.targets.count);
   const ExperimentReport report = RunClosedLoopExperiment(experiment, stop, std::cout);
   if (report.interrupted) throw CLI::RuntimeError(130);
 }
@@ -145,6 +170,19 @@ void AddDemoCommand(CLI::App& app) {
                    "rendered inside the capture service; auto: gige in a private namespace")
       ->check(CLI::IsMember({"auto", "gige", "simulated"}))
       ->capture_default_str();
+  command
+      ->add_option("--hosts", args->hosts,
+                   "1: every program on one network; 3: camera, control and operator hosts "
+                   "(network namespaces on a bridge; docs/rig.md)")
+      ->check(CLI::IsMember({1, 3}))
+      ->capture_default_str();
+  command
+      ->add_option("--camera-clock-offset-ms", args->camera_clock_offset_ms,
+                   "--hosts 3: the camera host's clock this far off, ms (test-only)")
+      ->capture_default_str();
+  command->add_flag("--faults", args->faults,
+                    "--hosts 3: in the last run, pull the control host's link for 2 s, kill "
+                    "the shape service (restarted), restart the logger");
   command->add_flag("--pipeline", args->pipeline,
                     "the live sensing pipeline alone (no controller), scored, logged, replayed");
   command->add_flag("--no-replay", args->no_replay, "--pipeline: do not replay the log");
@@ -156,10 +194,15 @@ void AddDemoCommand(CLI::App& app) {
   command->add_option("--voxel-size", args->voxel_size, "--offline: voxel edge, mm")
       ->capture_default_str();
   command->callback([args] {
+    if (args->hosts != 3 && (args->faults || args->camera_clock_offset_ms != 0.0)) {
+      throw InputError("--faults and --camera-clock-offset-ms need --hosts 3");
+    }
     if (args->offline) {
       RunOffline(*args);
     } else if (args->pipeline) {
       RunLive(*args);
+    } else if (args->hosts == 3) {
+      RunExperimentOnHosts(*args);
     } else {
       RunExperiment(*args);
     }

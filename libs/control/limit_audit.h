@@ -26,12 +26,17 @@ class LimitAudit {
  public:
   explicit LimitAudit(SafetyEnvelope envelope) : envelope_(std::move(envelope)) {}
 
-  // A command sent at `utime` (µs, the sender's clock); the rate is checked
-  // against the previous command.
-  void Check(const Eigen::VectorXd& command, int64_t utime);
+  // A command sent at `utime` (µs, the sender's clock) with the sender's
+  // step number `seq` (-1: unknown); the rate is checked against the
+  // previous command. Commands the audit did not see (lost on the way to
+  // it: `seq` skipped) each had a step of their own, so the step across the
+  // gap may be that many steps long.
+  void Check(const Eigen::VectorXd& command, int64_t utime, int64_t seq = -1);
 
   const LimitViolations& violations() const { return violations_; }
   int64_t commands() const { return commands_; }
+  // Commands skipped by `seq`: sent, but never seen by the audit.
+  int64_t missed() const { return missed_; }
   // What the first violation was ("" when none).
   const std::string& first_violation() const { return first_; }
 
@@ -43,6 +48,8 @@ class LimitAudit {
   int64_t commands_ = 0;
   Eigen::VectorXd previous_;
   int64_t previous_utime_ = -1;
+  int64_t previous_seq_ = -1;
+  int64_t missed_ = 0;
   std::string first_;
 };
 

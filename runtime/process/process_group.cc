@@ -6,6 +6,8 @@
 #include <cstdlib>
 #include <string_view>
 
+#include "runtime/host_clock.h"
+
 namespace shapesense {
 namespace fs = std::filesystem;
 namespace {
@@ -44,6 +46,11 @@ ProcessGroup::ProcessGroup(fs::path logs_dir, const std::atomic<bool>& stop, Hoo
 ProcessGroup::~ProcessGroup() { StopAll(); }
 
 void ProcessGroup::Launch(const ProgramSpec& process) {
+  running_.push_back({process, StartChild(process, false)});
+}
+
+std::unique_ptr<ChildProcess> ProcessGroup::StartChild(const ProgramSpec& process,
+                                                       bool keep_log) const {
   ChildOptions options;
   options.capture_stderr = true;
   options.log_file = logs_dir_ / (process.name + ".log");
@@ -53,9 +60,9 @@ void ProcessGroup::Launch(const ProgramSpec& process) {
   options.network_namespace = process.network_namespace;
   options.host_name = process.host_name;
   options.environment = process.environment;
-  fs::remove(options.log_file);
+  if (!keep_log) fs::remove(options.log_file);
   try {
-    running_.push_back({process, std::make_unique<ChildProcess>(process.argv, options)});
+    return std::make_unique<ChildProcess>(process.argv, options);
   } catch (const std::runtime_error& e) {
     throw ProgramFailure(process.name, e.what());
   }
@@ -111,10 +118,40 @@ void ProcessGroup::ReadOutput() {
 void ProcessGroup::CheckRunning() {
   for (Running& running : running_) {
     running.child->ReadAvailable();
+    // A one-off job may end; Stop() records how.
+    if (running.process.runs_to_end) continue;
     if (const std::optional<int> status = running.child->ExitStatus()) {
-      throw Failure(running, DescribeExitStatus(*status) + " while the demo ran");
+      if (!running.process.restart) {
+        throw Failure(running, DescribeExitStatus(*status) + " while the demo ran");
+      }
+      Restart(running, *status);
     }
   }
+}
+
+// Records how it ended and starts it again, as systemd would.
+void ProcessGroup::Restart(Running& running, int status) {
+  ends_.push_back({running.process.name, DescribeExitStatus(status) + ", restarted", false,
+                   running.process.argv});
+  running.child = StartChild(running.process, true);
+  ++running.restarts;
+  running.last_restart_utime = HostUtime();
+}
+
+int ProcessGroup::restarts(const std::string& name) const {
+  const Running* running = FindOrNull(name);
+  return running == nullptr ? 0 : running->restarts;
+}
+
+int64_t ProcessGroup::last_restart_utime(const std::string& name) const {
+  const Running* running = FindOrNull(name);
+  return running == nullptr ? 0 : running->last_restart_utime;
+}
+
+const ProcessGroup::Running* ProcessGroup::FindOrNull(const std::string& name) const {
+  const auto found = std::find_if(running_.begin(), running_.end(),
+                                  [&](const Running& r) { return r.process.name == name; });
+  return found == running_.end() ? nullptr : &*found;
 }
 
 ProgramEnd ProcessGroup::Stop(const std::string& name) {

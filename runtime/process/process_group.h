@@ -7,6 +7,7 @@
 // their programs under systemd instead (deploy/).
 #include <atomic>
 #include <chrono>
+#include <cstdint>
 #include <filesystem>
 #include <functional>
 #include <memory>
@@ -41,6 +42,10 @@ struct ProgramSpec {
   int network_namespace = -1;
   std::string host_name = {};
   std::vector<std::pair<std::string, std::string>> environment = {};
+  // Started again, at once, whenever it ends while the group runs: a stand-in
+  // for systemd's Restart=on-failure in the tests and the demo's faults. Its
+  // output goes on in the same log.
+  bool restart = false;
 };
 
 // A program of the group failed: it could not start, ended early, or never
@@ -89,8 +94,13 @@ class ProcessGroup {
   bool WaitUntilUp(const std::string& name, std::chrono::seconds timeout);
   // Reads every program's output (a program whose pipe fills up blocks).
   void ReadOutput();
-  // Throws ProgramFailure when a program has ended that should still run.
+  // Throws ProgramFailure when a program has ended that should still run (a
+  // one-off job may end: Stop() then records how);
+  // restarts one that ended and is to be restarted (ProgramSpec::restart).
   void CheckRunning();
+  // How often the program was restarted, and when last (µs, HostUtime; 0: never).
+  int restarts(const std::string& name) const;
+  int64_t last_restart_utime(const std::string& name) const;
   // Stops one program (SIGTERM, SIGKILL after a grace period); stopping
   // one that already ended only records how it ended.
   ProgramEnd Stop(const std::string& name);
@@ -107,9 +117,14 @@ class ProcessGroup {
   struct Running {
     ProgramSpec process;
     std::unique_ptr<ChildProcess> child;
+    int restarts = 0;
+    int64_t last_restart_utime = 0;
   };
 
   Running& Find(const std::string& name);
+  const Running* FindOrNull(const std::string& name) const;
+  std::unique_ptr<ChildProcess> StartChild(const ProgramSpec& process, bool keep_log) const;
+  void Restart(Running& running, int status);
   bool IsUp(Running& running);
   ProgramFailure Failure(const Running& running, const std::string& what) const;
 

@@ -18,9 +18,6 @@
 #include <sstream>
 
 #include "clients/tools/demo/closed_loop_experiment.h"
-#include "libs/config/options_yaml.h"
-#include "libs/control/control_options.h"
-#include "runtime/file_io.h"
 #include "tests/e2e/live_pipeline.h"
 #include "tests/support/network_test.h"
 
@@ -53,22 +50,6 @@ class ClosedLoopTest : public ::testing::Test {
   fs::path out_;
 };
 
-// A copy of `config` whose controller holds after 0.6 s without sensing and
-// stops after 3 s (sensing at 5 Hz, seconds late under sanitizers).
-fs::path ConfigWithSlowerWatchdog(const fs::path& config, const fs::path& copy) {
-  fs::create_directories(copy);
-  for (const fs::directory_entry& entry : fs::directory_iterator(config)) {
-    if (entry.path().extension() == ".yaml")
-      fs::copy_file(entry.path(), copy / entry.path().filename());
-  }
-  ControllerOptions options =
-      ParseControllerYaml(ReadTextFile(copy / "controller.yaml"), "controller.yaml");
-  options.watchdog.hold_age = 0.6;
-  options.watchdog.lost_age = 3.0;
-  WriteFileAtomically(copy / "controller.yaml", OptionsToDocumentedYaml(options));
-  return copy;
-}
-
 void ExpectEveryRunClean(const ExperimentReport& report, const std::string& log) {
   EXPECT_EQ(report.failure, "") << log;
   EXPECT_FALSE(report.interrupted);
@@ -97,7 +78,7 @@ TEST_F(ClosedLoopTest, ClosedLoopReachesTheTargetsWithinAMillimetreWhereOpenLoop
                  "checked in Release builds"
               << std::endl;
     args.rate_hz = e2e::LiveRate();
-    args.config_dir = ConfigWithSlowerWatchdog(args.config_dir, out_ / "config");
+    args.config_dir = e2e::ConfigWithSlowerWatchdog(args.config_dir, out_ / "config");
     args.targets.count = 4;
     args.targets.hold_s = 8.0;
   } else {

@@ -8,6 +8,7 @@
 
 #include "libs/camera/rig_yaml.h"
 #include "libs/config/options_yaml.h"
+#include "libs/control/control_options.h"
 #include "libs/geometry/polyline.h"
 #include "libs/sim/scene_generators.h"
 #include "libs/sim/trajectory.h"
@@ -57,6 +58,20 @@ bool UnderSanitizers() {
 }
 
 double LiveRate() { return UnderSanitizers() ? 5.0 : 30.0; }
+
+fs::path ConfigWithSlowerWatchdog(const fs::path& config, const fs::path& copy) {
+  fs::create_directories(copy);
+  for (const fs::directory_entry& entry : fs::directory_iterator(config)) {
+    if (entry.path().extension() == ".yaml")
+      fs::copy_file(entry.path(), copy / entry.path().filename());
+  }
+  ControllerOptions options =
+      ParseControllerYaml(ReadTextFile(copy / "controller.yaml"), "controller.yaml");
+  options.watchdog.hold_age = 0.6;
+  options.watchdog.lost_age = 3.0;
+  WriteFileAtomically(copy / "controller.yaml", OptionsToDocumentedYaml(options));
+  return copy;
+}
 
 Recorder::Recorder(const std::string& url) : Recorder(LcmBusOptions::FromEnvironment(url)) {}
 

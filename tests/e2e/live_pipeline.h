@@ -41,6 +41,12 @@ bool UnderSanitizers();
 // service dropped frame-sets on this 2-core machine: 5 Hz there.
 double LiveRate();
 
+// A copy of the folder `config` in `copy` whose controller holds after 0.6 s
+// without sensing and stops after 3 s: sensing at 5 Hz, seconds late, under
+// sanitizers.
+std::filesystem::path ConfigWithSlowerWatchdog(const std::filesystem::path& config,
+                                               const std::filesystem::path& copy);
+
 // A message as it arrived at the test.
 template <class Message>
 struct Received {

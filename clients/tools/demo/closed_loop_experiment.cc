@@ -1,13 +1,20 @@
 #include "clients/tools/demo/closed_loop_experiment.h"
 
 #include <chrono>
+#include <csignal>
 #include <cstdio>
+#include <exception>
+#include <lcm/lcm-cpp.hpp>
+#include <map>
 #include <opencv2/imgcodecs.hpp>
 #include <optional>
 #include <set>
+#include <thread>
 #include <utility>
 
+#include "clients/tools/demo/demo_hosts.h"
 #include "clients/tools/demo/demo_session.h"
+#include "libs/config/options_yaml.h"
 #include "libs/control/targets.h"
 #include "libs/core/error.h"
 #include "libs/evaluation/closed_loop_plot.h"
@@ -16,8 +23,10 @@
 #include "runtime/file_io.h"
 #include "runtime/lcm/channels.h"
 #include "runtime/lcm/shape_message.h"
+#include "runtime/rig/rig_check.h"
 #include "services/controller/controller_config.h"
 #include "shapesense/configuration_target_t.hpp"
+#include "shapesense/estop_t.hpp"
 #include "shapesense/tendon_command_t.hpp"
 
 namespace shapesense {
@@ -30,6 +39,18 @@ constexpr double kPublishAheadS = 0.3;
 // The first target's clock starts this long after the controller is up.
 constexpr double kRunStartDelayS = 0.5;
 constexpr double kProgressPeriodS = 5.0;
+// The operator releases a stopped controller once shapes this fresh come,
+// and not more often than every kReleasePeriodS.
+constexpr int64_t kFreshShapeUs = 300'000;
+constexpr int64_t kReleasePeriodUs = 500'000;
+// `rig status` is asked this long into the last run (the controller is up).
+constexpr double kRigStatusAtS = 3.0;
+// The virtual rig's plant link crosses the bridge only because the plant is
+// simulated on the camera host; a real rig's actuators hang off the control
+// host. It outlasts the control link's 2 s fault, as a local CAN bus would.
+constexpr double kPlantLinkTimeoutS = 4.0;
+// lcm-logger on the operator host keeps this many earlier files (--rotate).
+constexpr int kLogRotation = 10;
 
 struct ExperimentFiles {
   fs::path plant;       // the rig-sim's --plant
@@ -52,6 +73,30 @@ ExperimentFiles FindFiles(const ExperimentArgs& args) {
     if (!fs::exists(file)) throw InputError(file.string() + ": not found");
   }
   return files;
+}
+
+// The config folder copied into `dir`, the plant link's timeout widened
+// (kPlantLinkTimeoutS): the controller of a run on three hosts.
+ExperimentFiles ConfigForHosts(const ExperimentFiles& files, const fs::path& dir) {
+  fs::create_directories(dir);
+  for (const fs::directory_entry& entry :
+       fs::directory_iterator(files.controller.parent_path())) {
+    if (!entry.is_regular_file()) continue;
+    fs::copy_file(entry.path(), dir / entry.path().filename(),
+                  fs::copy_options::overwrite_existing);
+  }
+  const fs::path client = dir / files.controller.filename();
+  const auto client_options = OptionsFromYamlText<ControllerClientOptions>(
+      ReadTextFile(client), client.string());
+  const fs::path actuators = dir / client_options.actuators;
+  auto options =
+      OptionsFromYamlText<ActuatorOptions>(ReadTextFile(actuators), actuators.string());
+  options.rig.state_timeout_s = kPlantLinkTimeoutS;
+  WriteFileAtomically(actuators,
+                      "# Written by `shapesense demo --hosts 3`: config/actuators.yaml with the "
+                      "plant link's\n# timeout past the control link's 2 s fault.\n" +
+                          OptionsToDocumentedYaml(options));
+  return {files.plant, files.shape, client};
 }
 
 // The controller's own view: its model, limits and target resolution.
@@ -121,6 +166,9 @@ class ExperimentListener {
                                     [this](service_status_t&& status, const std::string&, int64_t) {
                                       scorer_.AddStatus(status);
                                       seen_.insert(status.service);
+                                      if (status.num_clock_offsets > 0) {
+                                        by_host_[status.header.host] = std::move(status);
+                                      }
                                     });
   }
 
@@ -130,6 +178,7 @@ class ExperimentListener {
     run_ = run;
     audit_ = LimitAudit(envelope_);
     truth_.clear();
+    shape_times_.clear();
     seen_.erase("controller");
   }
   // Ends the recording: the truth's times become seconds from `origin_utime`.
@@ -141,9 +190,20 @@ class ExperimentListener {
     run_->violations = audit_.violations();
     run_->first_violation = audit_.first_violation();
     run_->commands = audit_.commands();
+    run_->commands_missed = audit_.missed();
     run_ = nullptr;
   }
   bool StatusSeen(const std::string& service) const { return seen_.contains(service); }
+  // When the run's shapes with q arrived (this clock, µs).
+  const std::vector<int64_t>& ShapeTimes() const { return shape_times_; }
+  // The controller's newest command was a stop, and a shape has come since
+  // `fresh_us` (µs, this clock): what the operator waits for to release it.
+  bool StoppedWithFreshSensing(int64_t now_utime, int64_t fresh_us) const {
+    return last_mode_ == tendon_command_t::MODE_STOP && !shape_times_.empty() &&
+           now_utime - shape_times_.back() < fresh_us;
+  }
+  // Each host's newest status that carries clock offsets.
+  const std::map<std::string, service_status_t>& StatusByHost() const { return by_host_; }
   // The newest true configuration of the run, as ConfigurationSample with
   // the time from `origin_utime`; nullopt before any.
   std::optional<ConfigurationSample> Latest(int64_t origin_utime) const {
@@ -163,14 +223,17 @@ class ExperimentListener {
   }
   void OnShape(const shape_t& shape, int64_t utime) {
     scorer_.AddShape(shape, utime);
-    if (run_ != nullptr && shape.has_configuration) ++run_->shapes;
+    if (run_ == nullptr || !shape.has_configuration) return;
+    ++run_->shapes;
+    shape_times_.push_back(utime);
   }
   void OnCommand(const tendon_command_t& command) {
     if (run_ == nullptr) return;
+    last_mode_ = command.mode;
     audit_.Check(Eigen::Map<const Eigen::VectorXd>(
                      command.displacement_mm.data(),
                      static_cast<Eigen::Index>(command.displacement_mm.size())),
-                 command.header.utime);
+                 command.header.utime, command.header.seq);
   }
 
   DemoScorer& scorer_;
@@ -178,7 +241,10 @@ class ExperimentListener {
   LimitAudit audit_;
   ExperimentRun* run_ = nullptr;
   std::vector<std::pair<int64_t, Configuration>> truth_;  // by trigger time, µs
+  std::vector<int64_t> shape_times_;
+  int8_t last_mode_ = tendon_command_t::MODE_HOLD;
   std::set<std::string> seen_;
+  std::map<std::string, service_status_t> by_host_;
 };
 
 // The index of the target in force at `time_s`, -1 before the first.
@@ -222,15 +288,76 @@ void PrintProgress(const ExperimentReport& report, const std::string& mode, doub
   log << line << std::endl;
 }
 
+// The three hosts' side of the experiment (demo_hosts.h): the rig file,
+// checked as `shapesense rig check` would, and each program put on its host
+// with the file's environment. With one host, Place() changes nothing.
+class HostLayout {
+ public:
+  HostLayout(const ExperimentArgs& args, const fs::path& setup_dir,
+             const std::vector<std::string>& cameras)
+      : hosts_(args.hosts), bin_dir_(args.bin_dir) {
+    if (hosts_ == nullptr) return;
+    rig_file_ = setup_dir / "rig_hosts.yaml";
+    const std::string text = DemoRigFileText(cameras, kDemoLcmUrl);
+    WriteFileAtomically(rig_file_, text);
+    rig_ = ParseRigFile(text, rig_file_);
+    std::string problems;
+    for (const std::string& problem : CheckRig(rig_)) problems += "\n  " + problem;
+    if (!problems.empty()) throw InputError(rig_file_.string() + ":" + problems);
+  }
+
+  bool active() const { return hosts_ != nullptr; }
+  const VirtualHosts& hosts() const { return *hosts_; }
+  void Place(ProgramSpec* spec) const {
+    if (hosts_ != nullptr) PlaceOnDemoHost(*hosts_, rig_, spec);
+  }
+  // `shapesense rig status --once --json` on the operator host.
+  ProgramSpec RigStatus(const fs::path& shapesense) const {
+    ProgramSpec spec{"rig-status",
+                     {shapesense.string(), "rig", "status", "--rig", rig_file_.string(), "--once",
+                      "--json"},
+                     "",
+                     "",
+                     true};
+    Place(&spec);
+    return spec;
+  }
+
+ private:
+  const VirtualHosts* hosts_;
+  fs::path bin_dir_;
+  fs::path rig_file_;
+  RigFile rig_;
+};
+
+// The last JSON document a program printed into its log (`rig status
+// --json` prints one, indented, starting with a line "{").
+nlohmann::json LastJson(const fs::path& log) {
+  const std::string text = fs::exists(log) ? ReadTextFile(log) : "";
+  size_t start = text.rfind("\n{\n");
+  start = start == std::string::npos ? (text.starts_with("{") ? 0 : text.size()) : start + 1;
+  if (start >= text.size()) return nullptr;
+  nlohmann::json json = nlohmann::json::parse(text.substr(start), nullptr, false);
+  return json.is_discarded() ? nullptr : json;
+}
+
+// What a run does besides its targets: faults (three hosts), the
+// operator's release of a stopped controller, the rig's status.
+struct RunExtras {
+  FaultInjector* faults = nullptr;
+  bool ask_rig_status = false;
+};
+
 // One controller run: start it, stream the targets, record, stop it.
 class RunDriver {
  public:
   RunDriver(const ExperimentArgs& args, const DemoSettings& settings, const fs::path& controller,
-            ProcessGroup& processes, LcmBus& bus, ExperimentListener& listener,
-            const std::atomic<bool>& stop, std::ostream& log)
+            const HostLayout& layout, ProcessGroup& processes, LcmBus& bus,
+            ExperimentListener& listener, const std::atomic<bool>& stop, std::ostream& log)
       : args_(args),
         settings_(settings),
         controller_(controller),
+        layout_(layout),
         processes_(processes),
         bus_(bus),
         listener_(listener),
@@ -238,52 +365,93 @@ class RunDriver {
         log_(log) {}
 
   // False when stopped meanwhile.
-  bool Run(const std::string& mode, ExperimentReport& report, ExperimentRun& run) {
-    const ProgramSpec process = ControllerRun(settings_, controller_, mode, settings_.out / mode);
+  bool Run(const std::string& mode, ExperimentReport& report, ExperimentRun& run,
+           const RunExtras& extras) {
+    ProgramSpec process = ControllerRun(settings_, controller_, mode, settings_.out / mode);
+    layout_.Place(&process);
     fs::create_directories(settings_.out / mode);
     listener_.BeginRun(&run);
     log_ << "  starting " << process.name << std::endl;
     if (!processes_.Start(process, kDemoStartTimeout)) return false;
-    const int64_t origin = NowUtime() + static_cast<int64_t>(kRunStartDelayS * 1e6);
-    const bool finished = Stream(mode, report, run, origin);
+    origin_ = NowUtime() + static_cast<int64_t>(kRunStartDelayS * 1e6);
+    const bool finished = Stream(mode, report, run, extras);
+    if (extras.faults != nullptr) extras.faults->Finish(NowUtime());
     run.end = processes_.Stop(process.name);
-    listener_.EndRun(origin);
+    listener_.EndRun(origin_);
     run.score = ScoreRun(mode, report.targets, run.truth, report.rest, args_.window_s);
+    if (extras.ask_rig_status) CollectRigStatus(report);
     return finished;
   }
+  int64_t origin() const { return origin_; }
+  int releases() const { return releases_; }
 
  private:
   bool Stream(const std::string& mode, const ExperimentReport& report, ExperimentRun& run,
-              int64_t origin) {
+              const RunExtras& extras) {
     const double end_s = report.targets.back().end_s;
     double next_progress = kProgressPeriodS;
+    bool asked = !extras.ask_rig_status;
     for (;;) {
-      const double t = static_cast<double>(NowUtime() - origin) * 1e-6;
+      const int64_t now = NowUtime();
+      const double t = static_cast<double>(now - origin_) * 1e-6;
       if (stop_) return false;
       if (t >= end_s) return true;
       while (run.targets_sent < static_cast<int>(report.targets.size()) &&
              report.targets[static_cast<size_t>(run.targets_sent)].start_s - kPublishAheadS <= t) {
         const auto& target = report.targets[static_cast<size_t>(run.targets_sent)];
-        bus_.Publish(channels::kTarget, TargetMessage(target, origin, run.targets_sent));
+        bus_.Publish(channels::kTarget, TargetMessage(target, origin_, run.targets_sent));
         ++run.targets_sent;
+      }
+      if (extras.faults != nullptr) extras.faults->Step(t, report.targets, now);
+      ReleaseIfStopped(now);
+      if (!asked && t >= kRigStatusAtS) {
+        processes_.Launch(layout_.RigStatus(settings_.bin_dir / "shapesense"));
+        asked = true;
       }
       Pump(bus_, 20);
       processes_.CheckRunning();
       if (args_.progress != DemoProgress::kOff && t >= next_progress) {
         next_progress += kProgressPeriodS;
-        PrintProgress(report, mode, t, listener_.Latest(origin), log_);
+        PrintProgress(report, mode, t, listener_.Latest(origin_), log_);
       }
     }
+  }
+
+  // The operator re-arms a controller that stopped (sensing lost) once
+  // fresh shapes come again: SHAPESENSE_ESTOP released (docs/controller.md).
+  void ReleaseIfStopped(int64_t now) {
+    if (!listener_.StoppedWithFreshSensing(now, kFreshShapeUs)) return;
+    if (now - last_release_ < kReleasePeriodUs) return;
+    estop_t release{};
+    release.header.utime = now;
+    release.engaged = false;
+    release.reason = "sensing is back";
+    release.source = "shapesense demo (operator)";
+    bus_.Publish(channels::kEstop, release);
+    last_release_ = now;
+    ++releases_;
+    log_ << "  the controller stopped; sensing is back: released it" << std::endl;
+  }
+
+  void CollectRigStatus(ExperimentReport& report) {
+    const ProgramEnd end = processes_.Stop("rig-status");
+    if (!report.rig) return;
+    report.rig->rig_status_end = end.how;
+    report.rig->rig_status = LastJson(settings_.out / "logs" / "rig-status.log");
   }
 
   const ExperimentArgs& args_;
   const DemoSettings& settings_;
   const fs::path controller_;
+  const HostLayout& layout_;
   ProcessGroup& processes_;
   LcmBus& bus_;
   ExperimentListener& listener_;
   const std::atomic<bool>& stop_;
   std::ostream& log_;
+  int64_t origin_ = 0;
+  int64_t last_release_ = 0;
+  int releases_ = 0;
 };
 
 void CheckArgs(const ExperimentArgs& args) {
@@ -301,6 +469,9 @@ void CheckArgs(const ExperimentArgs& args) {
   for (const std::string& mode : args.modes) {
     ControlMode parsed{};
     if (!ParseControlMode(mode, &parsed)) throw InputError("mode '" + mode + "': unknown");
+  }
+  if (!args.faults.empty() && args.hosts == nullptr) {
+    throw InputError("faults: they act on the hosts' links and programs (--hosts 3)");
   }
 }
 
@@ -357,24 +528,206 @@ void PrintRunSummary(const ExperimentRun& run, std::ostream& log) {
       << "; controller " << run.end.how << std::endl;
 }
 
-// The backgrounds, the pipeline, then one controller run per mode; false
-// when stopped before the end.
-bool RunPhases(const ExperimentArgs& args, const DemoPlan& plan, const DemoSettings& settings,
-               const ExperimentFiles& files, ProcessGroup& processes, LcmBus& bus,
-               ExperimentListener& listener, const std::atomic<bool>& stop,
-               ExperimentReport& report, std::ostream& log) {
+// lcm-logger on the operator host rotates its files (--rotate), as the rig
+// file's does: it writes pipeline.lcm.0 (a restart goes on in it) and moves
+// a full one to .1 and on.
+void RotateLogs(DemoPlan& plan) {
+  for (ProgramSpec& process : plan.pipeline) {
+    if (process.name != "lcm-logger") continue;
+    for (std::string& arg : process.argv) {
+      if (arg == "--force") arg = "--rotate=" + std::to_string(kLogRotation);
+    }
+  }
+  for (int i = 0; i <= kLogRotation; ++i) {
+    fs::remove(plan.log.string() + "." + std::to_string(i));
+  }
+}
+
+// The logger's files, oldest first (pipeline.lcm.N ... .0), or the one log.
+std::vector<fs::path> LogFiles(const fs::path& log) {
+  std::vector<fs::path> files;
+  for (int i = kLogRotation; i >= 0; --i) {
+    const fs::path rotated = log.string() + "." + std::to_string(i);
+    if (fs::exists(rotated)) files.push_back(rotated);
+  }
+  if (files.empty() && fs::exists(log)) files.push_back(log);
+  return files;
+}
+
+// The frame-set truths in the logger's files: when each was logged (µs,
+// the operator's clock) and its trigger sequence number.
+std::vector<std::pair<int64_t, int64_t>> LoggedTruths(const std::vector<fs::path>& files) {
+  std::vector<std::pair<int64_t, int64_t>> logged;
+  for (const fs::path& file : files) {
+    lcm::LogFile log(file.string(), "r");
+    if (!log.good()) continue;
+    while (const lcm::LogEvent* event = log.readNextEvent()) {
+      if (event->channel != channels::kTruth) continue;
+      shape_t truth;
+      if (truth.decode(event->data, 0, static_cast<int>(event->datalen)) < 0) continue;
+      logged.emplace_back(event->timestamp, truth.trigger_seq);
+    }
+  }
+  return logged;
+}
+
+// The logger's continuity across its restarts (the faults').
+void JudgeLogs(const fs::path& log, RigNetworkReport& rig) {
+  std::vector<int64_t> restarts;
+  for (const FaultOutcome& fault : rig.faults) {
+    if (fault.event.fault.kind == FaultKind::kRestartLogger) {
+      restarts.push_back(fault.event.end_utime);
+    }
+  }
+  if (restarts.empty()) return;
+  const LogContinuity continuity = JudgeContinuity(SplitAt(LoggedTruths(LogFiles(log)), restarts));
+  for (FaultOutcome& fault : rig.faults) {
+    if (fault.event.fault.kind == FaultKind::kRestartLogger) fault.log = continuity;
+  }
+}
+
+FaultInjector MakeFaultInjector(const ExperimentArgs& args, const DemoPlan& plan,
+                                ProcessGroup& processes) {
+  const VirtualHosts* hosts = args.hosts;
+  ProgramSpec logger;
+  for (const ProgramSpec& process : plan.pipeline) {
+    if (process.name == "lcm-logger") logger = process;
+  }
+  return FaultInjector(args.faults,
+                       {[hosts](bool up) { hosts->SetLink(kControlHostName, up); },
+                        [&processes] { processes.Signal("shape", SIGKILL); },
+                        [&processes, logger] {
+                          processes.Stop(logger.name);
+                          const int64_t between = NowUtime();
+                          processes.Start(logger, kDemoStartTimeout);
+                          return between;
+                        }});
+}
+
+// How each fault of the last run went, from the controller's step log and
+// what this process heard (the logger's files are judged once it stopped).
+void JudgeFaults(const FaultInjector& injector, const ExperimentFiles& files,
+                 const fs::path& steps_csv, const ExperimentListener& listener,
+                 const ProcessGroup& processes, int64_t origin, int64_t end,
+                 RigNetworkReport& rig) {
+  const ControllerView view(files.controller);
+  const std::vector<ControllerStep> steps =
+      ParseControllerSteps(ReadTextFile(steps_csv), steps_csv.string());
+  const std::vector<FaultEvent>& events = injector.events();
+  for (size_t i = 0; i < events.size(); ++i) {
+    FaultOutcome outcome;
+    outcome.event = events[i];
+    outcome.at_s = static_cast<double>(events[i].start_utime - origin) * 1e-6;
+    const int64_t until = i + 1 < events.size() ? events[i + 1].start_utime : end;
+    outcome.conduct =
+        JudgeConduct(steps, events[i], until, view.setup.controller.watchdog.hold_age);
+    outcome.sensing_outage_s = OutageAround(listener.ShapeTimes(), events[i].start_utime);
+    if (events[i].fault.kind == FaultKind::kKillShape) outcome.restarts = processes.restarts("shape");
+    rig.faults.push_back(outcome);
+  }
+}
+
+// Each host's measured offsets of the others, ms.
+std::map<std::string, std::map<std::string, double>> ClockOffsets(
+    const ExperimentListener& listener) {
+  std::map<std::string, std::map<std::string, double>> offsets;
+  for (const auto& [host, status] : listener.StatusByHost()) {
+    for (size_t i = 0; i < status.clock_offset_hosts.size(); ++i) {
+      offsets[host][status.clock_offset_hosts[i]] =
+          static_cast<double>(status.clock_offsets_us[i]) * 1e-3;
+    }
+  }
+  return offsets;
+}
+
+RigNetworkReport DescribeHosts(const VirtualHosts& hosts, const DemoPlan& plan,
+                               const std::vector<std::string>& modes) {
+  RigNetworkReport rig;
+  rig.hosts = hosts.hosts();
+  for (const VirtualHostSpec& host : rig.hosts) rig.addresses[host.name] = hosts.Address(host.name);
+  for (const ProgramSpec& process : plan.pipeline) {
+    rig.programs[DemoHostOf(process.name)].push_back(process.name);
+  }
+  for (const std::string& mode : modes) rig.programs[kControlHostName].push_back("controller-" + mode);
+  rig.programs[kOperatorHostName].push_back("rig-status");
+  return rig;
+}
+
+// What a three-host run measures of its rig network while the runs go on.
+class RigNetworkWatch {
+ public:
+  explicit RigNetworkWatch(const HostLayout& layout)
+      : layout_(layout),
+        census_(layout.active() ? std::make_unique<NetworkCensus>(kDemoRigNetworkUrl) : nullptr) {}
+
+  void Begin() {
+    if (!layout_.active()) return;
+    begin_ = layout_.hosts().Bytes(kControlHostName);
+    begin_utime_ = NowUtime();
+  }
+  void End(RigNetworkReport& rig) const {
+    const VirtualHosts::LinkBytes end = layout_.hosts().Bytes(kControlHostName);
+    const double seconds = static_cast<double>(NowUtime() - begin_utime_) * 1e-6;
+    rig.received_bytes_per_s = static_cast<double>(end.received - begin_.received) / seconds;
+    rig.sent_bytes_per_s = static_cast<double>(end.sent - begin_.sent) / seconds;
+    rig.channel_messages = census_->Counts();
+    const std::string images = std::string(channels::kImagePattern).substr(0, 17);
+    for (const auto& [channel, count] : rig.channel_messages) {
+      if (channel.find(images) != std::string::npos) rig.image_messages += count;
+    }
+  }
+
+ private:
+  const HostLayout& layout_;
+  std::unique_ptr<NetworkCensus> census_;
+  VirtualHosts::LinkBytes begin_;
+  int64_t begin_utime_ = 0;
+};
+
+// Everything a run needs besides its settings.
+struct ExperimentParts {
+  const DemoPlan& plan;
+  const DemoSettings& settings;
+  const ExperimentFiles& files;
+  const HostLayout& layout;
+  ProcessGroup& processes;
+  LcmBus& bus;
+  ExperimentListener& listener;
+};
+
+// The backgrounds, the pipeline, then one controller run per mode (the
+// faults during the last); false when stopped before the end.
+bool RunPhases(const ExperimentArgs& args, const ExperimentParts& parts,
+               const std::atomic<bool>& stop, ExperimentReport& report, std::ostream& log) {
   log << "backgrounds: the rig showing its backdrop alone" << std::endl;
-  if (!StartAll(processes, plan.background, log)) return false;
-  processes.StopAll();
-  log << "live pipeline, the rig in plant mode, logged to " << plan.log.string() << std::endl;
-  if (!StartAll(processes, plan.pipeline, log)) return false;
-  RunDriver driver(args, settings, files.controller, processes, bus, listener, stop, log);
-  for (const std::string& mode : args.modes) {
+  if (!StartAll(parts.processes, parts.plan.background, log)) return false;
+  parts.processes.StopAll();
+  log << "live pipeline, the rig in plant mode, logged to " << parts.plan.log.string() << std::endl;
+  if (!StartAll(parts.processes, parts.plan.pipeline, log)) return false;
+  RigNetworkWatch watch(parts.layout);
+  watch.Begin();
+  RunDriver driver(args, parts.settings, parts.files.controller, parts.layout, parts.processes,
+                   parts.bus, parts.listener, stop, log);
+  FaultInjector faults = MakeFaultInjector(args, parts.plan, parts.processes);
+  for (size_t i = 0; i < args.modes.size(); ++i) {
+    const std::string& mode = args.modes[i];
+    const bool last = i + 1 == args.modes.size();
     log << mode << ": " << report.targets.size() << " targets, " << args.targets.hold_s << " s each"
-        << std::endl;
+        << (last && !args.faults.empty() ? ", with faults" : "") << std::endl;
     report.runs.emplace_back();
-    if (!driver.Run(mode, report, report.runs.back())) return false;
+    const RunExtras extras{last && !args.faults.empty() ? &faults : nullptr,
+                           last && parts.layout.active()};
+    if (!driver.Run(mode, report, report.runs.back(), extras)) return false;
     PrintRunSummary(report.runs.back(), log);
+    if (extras.faults != nullptr) {
+      JudgeFaults(faults, parts.files, parts.settings.out / mode / "controller_log.csv",
+                  parts.listener, parts.processes, driver.origin(), NowUtime(), *report.rig);
+    }
+  }
+  if (report.rig) {
+    watch.End(*report.rig);
+    report.rig->clock_offsets_ms = ClockOffsets(parts.listener);
+    report.rig->releases = driver.releases();
   }
   return true;
 }
@@ -387,6 +740,7 @@ nlohmann::json RunToJson(const ExperimentRun& run) {
                                       {"malformed", run.violations.malformed}};
   json["first_violation"] = run.first_violation;
   json["commands_audited"] = run.commands;
+  json["commands_missed_by_the_audit"] = run.commands_missed;
   json["sensed_shapes"] = run.shapes;
   json["truth_samples"] = run.truth.size();
   json["targets_sent"] = run.targets_sent;
@@ -398,6 +752,58 @@ nlohmann::json MeanError(const ExperimentReport& report, const std::string& mode
   const ExperimentRun* run = report.Run(mode);
   if (run == nullptr || run->score.targets_scored == 0) return nullptr;
   return run->score.mean_tip_error_mm;
+}
+
+nlohmann::json FaultToJson(const FaultOutcome& fault) {
+  const ControllerConduct& c = fault.conduct;
+  nlohmann::json json = {{"kind", FaultName(fault.event.fault.kind)},
+                         {"target", fault.event.fault.target},
+                         {"at_s", fault.at_s},
+                         {"lasted_s", static_cast<double>(fault.event.end_utime -
+                                                          fault.event.start_utime) *
+                                          1e-6},
+                         {"sensing_outage_s", fault.sensing_outage_s},
+                         {"controller",
+                          {{"steps", c.steps},
+                           {"held_steps", c.held_steps},
+                           {"stopped_steps", c.stopped_steps},
+                           {"commands_sent_on_stale_sensing", c.sent_on_stale},
+                           {"max_sensing_age_s", c.max_sensing_age_s},
+                           {"first_hold_after_s", c.first_hold_after_s},
+                           {"first_stop_after_s", c.first_stop_after_s},
+                           {"resumed_after_s", c.resumed_after_s}}}};
+  if (fault.event.fault.kind == FaultKind::kKillShape) json["restarts"] = fault.restarts;
+  if (fault.event.fault.kind == FaultKind::kRestartLogger) {
+    json["log"] = {{"truth_messages", fault.log.messages},
+                   {"missing_while_logging", fault.log.missing_within_runs},
+                   {"gap_frame_sets", fault.log.gap_between_runs}};
+  }
+  return json;
+}
+
+// The three-host fields of report.json.
+void AddRigToJson(const RigNetworkReport& rig, nlohmann::json& json) {
+  nlohmann::json hosts = nlohmann::json::array();
+  for (const VirtualHostSpec& host : rig.hosts) {
+    const auto programs = rig.programs.find(host.name);
+    hosts.push_back({{"name", host.name},
+                     {"address", rig.addresses.at(host.name)},
+                     {"clock_offset_ms", host.clock_offset_ms},
+                     {"programs", programs == rig.programs.end()
+                                      ? std::vector<std::string>{}
+                                      : programs->second}});
+  }
+  json["hosts"] = hosts;
+  json["rig_network_bytes_per_s"] = rig.received_bytes_per_s;
+  json["rig_network_sent_bytes_per_s"] = rig.sent_bytes_per_s;
+  json["image_messages_on_rig_network"] = rig.image_messages;
+  json["rig_network_messages"] = rig.channel_messages;
+  json["clock_offsets_ms"] = rig.clock_offsets_ms;
+  json["faults"] = nlohmann::json::array();
+  for (const FaultOutcome& fault : rig.faults) json["faults"].push_back(FaultToJson(fault));
+  json["operator_releases"] = rig.releases;
+  json["rig_status"] = rig.rig_status;
+  json["rig_status_end"] = rig.rig_status_end;
 }
 
 }  // namespace
@@ -452,6 +858,7 @@ nlohmann::json ExperimentReportToJson(const ExperimentReport& report) {
                      {"tip_error_max_mm", live.tip_error_max},
                      {"trigger_to_shape_p50_ms", live.trigger_to_shape_ms.p50}};
   json["log"] = report.log.string();
+  if (report.rig) AddRigToJson(*report.rig, json);
   json["programs"] = ProgramsToJson(report.programs);
   json["failure"] = report.failure;
   json["interrupted"] = report.interrupted;
@@ -480,16 +887,24 @@ fs::path FindConfigDir() {
   return {};
 }
 
-ExperimentReport RunClosedLoopExperiment(const ExperimentArgs& args, const std::atomic<bool>& stop,
-                                         std::ostream& log) {
+namespace {
+
+// The experiment on this thread's network (with three hosts, the operator
+// host's).
+ExperimentReport RunExperimentHere(const ExperimentArgs& args, const std::atomic<bool>& stop,
+                                   std::ostream& log) {
   CheckArgs(args);
-  const ExperimentFiles files = FindFiles(args);
-  const ControllerView view(files.controller);
+  ExperimentFiles files = FindFiles(args);
   SyntheticRigOptions rig_options;
   rig_options.seed = args.seed;
   const Rig rig = MakeSyntheticRig(rig_options);
-  const DemoSettings settings = MakeSettings(args, rig, files, RunSeconds(args));
-  const DemoPlan plan = MakeDemoPlan(settings);
+  DemoSettings settings = MakeSettings(args, rig, files, RunSeconds(args));
+  if (args.hosts != nullptr) {
+    files = ConfigForHosts(files, settings.out / "setup" / "config");
+    settings.lcm_url = kDemoRigNetworkUrl;
+  }
+  const ControllerView view(files.controller);
+  DemoPlan plan = MakeDemoPlan(settings);
   ExperimentReport report;
   report.network = args.network;
   report.lcm_url = settings.lcm_url;
@@ -498,10 +913,26 @@ ExperimentReport RunClosedLoopExperiment(const ExperimentArgs& args, const std::
   report.targets = ResolveTargets(args, view);
   report.window_s = args.window_s;
   report.log = plan.log;
+  if (const std::string error = CheckFaults(args.faults, report.targets); !error.empty()) {
+    throw InputError(error);
+  }
   ThrowIfMissing(plan);
   WarnIfSocketBuffersAreSmall(log);
   PrepareOutput(plan, rig);
-  LcmBus bus(settings.lcm_url);
+  const HostLayout layout(args, settings.out / "setup", settings.camera_names);
+  if (layout.active()) {
+    RotateLogs(plan);
+    for (ProgramSpec& process : plan.background) layout.Place(&process);
+    for (ProgramSpec& process : plan.pipeline) layout.Place(&process);
+    for (ProgramSpec& process : plan.pipeline) process.restart = process.name == "shape";
+    report.rig = DescribeHosts(*args.hosts, plan, args.modes);
+  }
+  LcmBusOptions bus_options = LcmBusOptions::FromEnvironment(settings.lcm_url);
+  if (layout.active()) {
+    bus_options.local_url = kDemoLcmUrl;
+    bus_options.host = kOperatorHostName;
+  }
+  LcmBus bus(bus_options);
   DemoScorer scorer;
   ExperimentListener listener(bus, scorer,
                               SafetyEnvelope(view.model, view.setup.controller.limits));
@@ -509,9 +940,9 @@ ExperimentReport RunClosedLoopExperiment(const ExperimentArgs& args, const std::
       plan.logs_dir, stop,
       {[&bus](int ms) { Pump(bus, ms); },
        [&listener](const std::string& service) { return listener.StatusSeen(service); }});
+  const ExperimentParts parts{plan, settings, files, layout, processes, bus, listener};
   try {
-    report.interrupted =
-        !RunPhases(args, plan, settings, files, processes, bus, listener, stop, report, log);
+    report.interrupted = !RunPhases(args, parts, stop, report, log);
     StopPipeline(processes, bus, scorer);
   } catch (const ProgramFailure& e) {
     processes.StopAll();
@@ -523,9 +954,32 @@ ExperimentReport RunClosedLoopExperiment(const ExperimentArgs& args, const std::
   processes.StopAll();
   report.sensing = scorer.Finish(NowUtime());
   report.programs = processes.ends();
+  if (report.rig) JudgeLogs(plan.log, *report.rig);
   WriteOutputs(report, settings.out, log);
   log << "wrote " << (settings.out / "report.json").string() << ", experiment.txt, "
       << "tip_paths.png; the programs' output is in " << plan.logs_dir.string() << "/\n";
+  return report;
+}
+
+}  // namespace
+
+// With three hosts, this process is the operator's: its bus, its census of
+// the rig network and the programs it starts belong to a thread that has
+// entered the operator host (each program then moves to its own host).
+ExperimentReport RunClosedLoopExperiment(const ExperimentArgs& args, const std::atomic<bool>& stop,
+                                         std::ostream& log) {
+  if (args.hosts == nullptr) return RunExperimentHere(args, stop, log);
+  ExperimentReport report;
+  std::exception_ptr error;
+  std::thread([&] {
+    try {
+      args.hosts->EnterFromThisThread(kOperatorHostName);
+      report = RunExperimentHere(args, stop, log);
+    } catch (...) {
+      error = std::current_exception();
+    }
+  }).join();
+  if (error) std::rethrow_exception(error);
   return report;
 }
 

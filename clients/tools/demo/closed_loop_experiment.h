@@ -21,16 +21,20 @@
 #include <atomic>
 #include <cstdint>
 #include <filesystem>
+#include <map>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <ostream>
 #include <string>
 #include <vector>
 
 #include "clients/tools/demo/demo_scorer.h"
+#include "clients/tools/demo/experiment_faults.h"
 #include "clients/tools/demo/live_demo.h"
 #include "libs/control/limit_audit.h"
 #include "libs/evaluation/closed_loop_score.h"
 #include "runtime/process/process_group.h"
+#include "runtime/process/virtual_hosts.h"
 
 namespace shapesense {
 
@@ -48,6 +52,44 @@ struct ExperimentArgs {
   std::filesystem::path bin_dir;                      // empty: beside this executable
   std::filesystem::path lcm_logger;                   // empty: lcm-logger on $PATH
   DemoProgress progress = DemoProgress::kLines;
+  // Three hosts (demo_hosts.h) made by the caller in its private network
+  // namespace, their clocks offset as it chose; null: one host.
+  const VirtualHosts* hosts = nullptr;
+  // Made during the last run; three hosts only (experiment_faults.h).
+  std::vector<ExperimentFault> faults;
+};
+
+// How one fault went (experiment_faults.h).
+struct FaultOutcome {
+  FaultEvent event;
+  double at_s = 0;                 // from the run's start
+  ControllerConduct conduct;       // from the controller's step log
+  double sensing_outage_s = 0;     // shapes heard by the operator, the gap across the fault
+  int restarts = 0;                // shape_killed: by the supervisor
+  LogContinuity log;               // logger_restarted: the truth in its log
+};
+
+// What the rig network carried and each host measured (three hosts only).
+struct RigNetworkReport {
+  std::vector<VirtualHostSpec> hosts;
+  std::map<std::string, std::string> addresses;
+  std::map<std::string, std::vector<std::string>> programs;  // by host
+  // The control host's rig interface over the runs.
+  double received_bytes_per_s = 0;
+  double sent_bytes_per_s = 0;
+  // Every message the operator host heard on the rig network, by channel;
+  // how many of them were camera images (must be none).
+  std::map<std::string, int64_t> channel_messages;
+  int64_t image_messages = 0;
+  // Each host's measured offset of every other host's clock, ms (from
+  // their status).
+  std::map<std::string, std::map<std::string, double>> clock_offsets_ms;
+  std::vector<FaultOutcome> faults;
+  int releases = 0;  // the operator's e-stop releases after a stop
+  // `shapesense rig status --once --json` on the operator host during the
+  // last run, and its exit status (0: every expected program up).
+  nlohmann::json rig_status;
+  std::string rig_status_end;
 };
 
 // What one controller run did.
@@ -56,7 +98,8 @@ struct ExperimentRun {
   std::vector<ConfigurationSample> truth;  // the plant's true q over the run
   LimitViolations violations;              // of the commands it sent
   std::string first_violation;
-  int64_t commands = 0;  // audited
+  int64_t commands = 0;         // audited
+  int64_t commands_missed = 0;  // sent but lost on the way to the audit (by step number)
   int64_t shapes = 0;    // sensed shapes with q that arrived during the run
   int targets_sent = 0;
   ProgramEnd end;  // how the controller ended (cleanly, on SIGTERM)
@@ -73,6 +116,7 @@ struct ExperimentReport {
   DemoScore sensing;  // the shapes against the truth over the whole experiment
   std::vector<ProgramEnd> programs;
   std::filesystem::path log;
+  std::optional<RigNetworkReport> rig;  // three hosts only
   std::string failure;
   bool interrupted = false;
 

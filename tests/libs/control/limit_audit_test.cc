@@ -151,6 +151,27 @@ TEST_F(LimitAuditTest, ALongGapAllowsNoMoreThanMaxRateTimesMaxStepPeriod) {
   }
 }
 
+// Commands lost on the way to the audit (a link down on a rig of several
+// hosts) each had a step: across a gap of k step numbers the command may
+// have moved k capped steps, and no more.
+TEST_F(LimitAuditTest, CommandsItMissedEachHadTheirStep) {
+  const double capped = limits_.max_rate * limits_.max_step_period;
+  const Eigen::VectorXd base = Base();
+  for (const double factor : {2.9, 3.1}) {
+    LimitAudit audit(envelope_);
+    audit.Check(base, 1'000'000, 10);
+    audit.Check(Stepped(base, capped * factor), 3'000'000, 13);  // 11 and 12 missed
+    EXPECT_EQ(audit.violations().rate, factor > 3.0 ? 1 : 0) << factor;
+    EXPECT_EQ(audit.missed(), 2);
+  }
+  // Without step numbers, the one capped step.
+  LimitAudit audit(envelope_);
+  audit.Check(base, 1'000'000);
+  audit.Check(Stepped(base, capped * 2.9), 3'000'000);
+  EXPECT_EQ(audit.violations().rate, 1);
+  EXPECT_EQ(audit.missed(), 0);
+}
+
 TEST_F(LimitAuditTest, WrongSizeAndNotFiniteAreMalformed) {
   LimitAudit audit(envelope_);
   const Eigen::VectorXd base = Base();

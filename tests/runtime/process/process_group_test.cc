@@ -6,8 +6,12 @@
 
 #include <gtest/gtest.h>
 
+#include <csignal>
 #include <filesystem>
+#include <fstream>
 #include <set>
+#include <sstream>
+#include <thread>
 
 namespace shapesense {
 namespace {
@@ -121,6 +125,38 @@ TEST_F(ProcessGroupTest, AProgramThatEndsWhileRunningIsNamed) {
   EXPECT_NE(message.find("out of memory"), std::string::npos) << message;
 }
 
+
+// The stand-in for systemd's Restart=on-failure: a program killed outright
+// is started again, its end recorded, its output kept in the same log.
+TEST_F(ProcessGroupTest, AProgramToRestartIsStartedAgainAfterItsEnd) {
+  ProcessGroup processes(logs_, stop_, Hooks());
+  ProgramSpec flaky = EndsOnTerm("flaky");
+  flaky.argv.back() = "echo \"started $$\"; " + flaky.argv.back();
+  flaky.restart = true;
+  ASSERT_TRUE(processes.Start(flaky, seconds(30)));
+  processes.Signal("flaky", SIGKILL);
+  for (int i = 0; i < 500 && processes.restarts("flaky") == 0; ++i) {
+    EXPECT_EQ(FailureOf([&] { processes.CheckRunning(); }), "");
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  }
+  EXPECT_EQ(processes.restarts("flaky"), 1);
+  EXPECT_GT(processes.last_restart_utime("flaky"), 0);
+  ASSERT_EQ(processes.ends().size(), 1u);
+  EXPECT_NE(processes.ends()[0].how.find("signal 9"), std::string::npos)
+      << processes.ends()[0].how;
+  EXPECT_NE(processes.ends()[0].how.find("restarted"), std::string::npos);
+  EXPECT_TRUE(processes.IsRunning("flaky"));
+  EXPECT_TRUE(processes.Stop("flaky").clean);
+  // Both runs printed into the one log.
+  std::ifstream log(logs_ / "flaky.log");
+  std::ostringstream read;
+  read << log.rdbuf();
+  const std::string text = read.str();
+  size_t starts = 0;
+  for (size_t at = text.find("started"); at != std::string::npos; at = text.find("started", at + 1))
+    ++starts;
+  EXPECT_EQ(starts, 2u) << text;
+}
 TEST_F(ProcessGroupTest, StoppedLastStartedFirst) {
   std::vector<std::string> names = {"rig-sim", "lcm-logger", "carving", "shape", "capture"};
   {

@@ -1,0 +1,77 @@
+#include "clients/tools/demo/demo_hosts.h"
+
+#include <sstream>
+#include <stdexcept>
+
+#include "runtime/rig/rig_units.h"
+
+namespace shapesense {
+
+std::vector<VirtualHostSpec> DemoHostSpecs(double camera_clock_offset_ms, int cameras) {
+  return {{kCameraHostName, camera_clock_offset_ms, cameras},
+          {kControlHostName, 0.0, 0},
+          {kOperatorHostName, 0.0, 0}};
+}
+
+std::string DemoRigFileText(const std::vector<std::string>& cameras,
+                            const std::string& local_network) {
+  std::ostringstream out;
+  out << "# Written by `shapesense demo --hosts 3`: the virtual rig's three hosts\n"
+         "# (config/rig.yaml documents every key).\n"
+         "rig:\n  name: demo\n  prefix: \"\"\n  rig_network: "
+      << kDemoRigNetworkUrl << "\n  local_network: " << local_network
+      << "\n  clock_offset_warning_ms: 1\n  cameras: [";
+  for (size_t i = 0; i < cameras.size(); ++i) out << (i > 0 ? ", " : "") << cameras[i];
+  // Carving and shape share the camera host: their voxel cloud and edge
+  // data need not cross the bridge.
+  out << "]\n  channels: {SHAPESENSE_VOXELS: local, SHAPESENSE_SILHOUETTES: local}\n"
+         "hosts:\n"
+         "  camera:\n    interface: rig0\n    programs:\n"
+         "      - {program: rig-sim}\n      - {program: capture}\n"
+         "      - {program: carving}\n      - {program: shape}\n"
+         "  control:\n    interface: rig0\n    programs:\n      - {program: controller}\n"
+         "  operator:\n    interface: rig0\n    programs:\n"
+         "      - {program: lcm-logger}\n      - {program: rig-status}\n";
+  return out.str();
+}
+
+std::string DemoHostOf(const std::string& program_name) {
+  for (const char* prefix : {"rig-sim", "capture", "carving", "shape"}) {
+    if (program_name.starts_with(prefix)) return kCameraHostName;
+  }
+  if (program_name.starts_with("controller")) return kControlHostName;
+  if (program_name.starts_with("lcm-logger") || program_name.starts_with("rig-status")) {
+    return kOperatorHostName;
+  }
+  throw std::invalid_argument("demo --hosts: no host for the program '" + program_name + "'");
+}
+
+void PlaceOnDemoHost(const VirtualHosts& hosts, const RigFile& rig, ProgramSpec* spec) {
+  for (auto& variable : RigEnvironment(rig)) spec->environment.push_back(std::move(variable));
+  hosts.PlaceOn(DemoHostOf(spec->name), spec);
+}
+
+NetworkCensus::NetworkCensus(const std::string& url) : lcm_(url) {
+  if (!lcm_.good()) throw std::runtime_error("cannot open LCM on " + url);
+  lcm_.subscribe(".*", &NetworkCensus::OnMessage, this);
+  thread_ = std::thread([this] {
+    while (!done_.load()) lcm_.handleTimeout(100);
+  });
+}
+
+NetworkCensus::~NetworkCensus() {
+  done_ = true;
+  thread_.join();
+}
+
+std::map<std::string, int64_t> NetworkCensus::Counts() const {
+  const std::lock_guard lock(mutex_);
+  return counts_;
+}
+
+void NetworkCensus::OnMessage(const lcm::ReceiveBuffer*, const std::string& channel) {
+  const std::lock_guard lock(mutex_);
+  ++counts_[channel];
+}
+
+}  // namespace shapesense
