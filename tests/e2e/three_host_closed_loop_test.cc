@@ -17,6 +17,7 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <iostream>
@@ -24,6 +25,7 @@
 
 #include "clients/tools/demo/closed_loop_experiment.h"
 #include "clients/tools/demo/demo_hosts.h"
+#include "runtime/file_io.h"
 #include "tests/e2e/live_pipeline.h"
 #include "tests/support/network_test.h"
 
@@ -57,11 +59,12 @@ class ThreeHostClosedLoopTest : public ::testing::Test {
     args.network = "three hosts in the test's private network namespace";
     args.progress = DemoProgress::kLines;
     args.modes = {"closed_loop"};
-    args.targets.count = 4;
+    args.targets.count = 8;
     args.targets.hold_s = 5.0;
     if (e2e::UnderSanitizers()) {
       args.rate_hz = e2e::LiveRate();
       args.config_dir = e2e::ConfigWithSlowerWatchdog(args.config_dir, out_ / (name + "_config"));
+      args.targets.count = 4;
       args.targets.hold_s = 8.0;
     }
     return args;
@@ -88,6 +91,20 @@ double OffsetSeen(const RigNetworkReport& rig, const std::string& by, const std:
   const auto offset = host->second.find(of);
   return offset == host->second.end() ? std::nan("") : offset->second;
 }
+
+// The controller's sensing age over its run, from its step log.
+double MedianSensingAge(const ExperimentReport& report) {
+  const fs::path csv = report.log.parent_path() / "closed_loop" / "controller_log.csv";
+  std::vector<double> ages;
+  for (const ControllerStep& step : ParseControllerSteps(ReadTextFile(csv), csv.string())) {
+    if (step.mode == "closed_loop") ages.push_back(step.sensing_age_s);
+  }
+  if (ages.empty()) return std::nan("");
+  std::nth_element(ages.begin(), ages.begin() + static_cast<long>(ages.size() / 2), ages.end());
+  return ages[ages.size() / 2];
+}
+
+double RunSeconds(const ExperimentReport& report) { return report.targets.back().end_s; }
 
 // What every run on three hosts must show.
 void ExpectACleanRigRun(const ExperimentReport& report, double camera_offset_ms) {
@@ -119,7 +136,9 @@ void ExpectACleanRigRun(const ExperimentReport& report, double camera_offset_ms)
   EXPECT_NE(rig.rig_status_end.find("status 0"), std::string::npos)
       << rig.rig_status_end << "\n"
       << rig.rig_status.dump(2);
+  // Every program ended cleanly (but the run the faults killed, restarted).
   for (const ProgramEnd& program : report.programs) {
+    if (program.how.ends_with(", restarted")) continue;
     EXPECT_TRUE(program.clean) << program.name << " " << program.how;
   }
 }
@@ -142,16 +161,23 @@ TEST_F(ThreeHostClosedLoopTest, TheCameraClockHalfASecondOffChangesNothing) {
   ExpectACleanRigRun(ahead, 500.0);
   ExpectACleanRigRun(behind, -500.0);
   const double reference = synchronised.runs.at(0).score.mean_tip_error_mm;
+  const double reference_age = MedianSensingAge(synchronised);
   std::cout << "closed-loop mean tip error: synchronised " << reference << " mm, camera +0.5 s "
             << ahead.runs.at(0).score.mean_tip_error_mm << " mm, camera -0.5 s "
-            << behind.runs.at(0).score.mean_tip_error_mm << " mm" << std::endl;
+            << behind.runs.at(0).score.mean_tip_error_mm << " mm; the controller's median "
+            << "sensing age " << reference_age * 1e3 << ", " << MedianSensingAge(ahead) * 1e3
+            << ", " << MedianSensingAge(behind) * 1e3 << " ms" << std::endl;
   for (const ExperimentReport* report : {&synchronised, &ahead, &behind}) {
-    const RunScore& score = report->runs.at(0).score;
-    EXPECT_LE(score.mean_tip_error_mm, 1.0);
-    // Run-to-run noise of the closed loop is a few tenths of a millimetre;
-    // a controller that took stale shapes or stopped would be millimetres off.
-    EXPECT_NEAR(score.mean_tip_error_mm, reference, 0.5);
-    EXPECT_GT(report->runs.at(0).shapes, 0.8 * report->rate_hz * 20.0);
+    const ExperimentRun& run = report->runs.at(0);
+    EXPECT_LE(run.score.mean_tip_error_mm, 1.0);
+    // The closed loop's run-to-run noise over 8 targets is a few tenths of a
+    // millimetre (the plant's play now and then leaves a target 1-2 mm off);
+    // a controller that took stale shapes or held would be millimetres off.
+    EXPECT_NEAR(run.score.mean_tip_error_mm, reference, 0.5);
+    // The sensing as fresh as with synchronised clocks: a controller that
+    // compared the camera's clock with its own would see it 0.5 s off.
+    EXPECT_NEAR(MedianSensingAge(*report), reference_age, 0.02);
+    EXPECT_GT(run.shapes, 0.8 * report->rate_hz * RunSeconds(*report));
     EXPECT_EQ(report->rig->releases, 0) << "the controller never stopped";
   }
 }
@@ -165,6 +191,7 @@ const FaultOutcome* FaultOf(const RigNetworkReport& rig, FaultKind kind) {
 
 TEST_F(ThreeHostClosedLoopTest, ALinkDownAKilledServiceAndARestartedLoggerAreSurvived) {
   ExperimentArgs args = Args("faults");
+  args.targets.count = 4;
   args.faults = StandardFaults(args.targets.count);
   const double hold_age = e2e::UnderSanitizers() ? kSanitizerHoldAgeS : kHoldAgeS;
   const double lost_age = e2e::UnderSanitizers() ? kSanitizerLostAgeS : kLostAgeS;
@@ -197,6 +224,9 @@ TEST_F(ThreeHostClosedLoopTest, ALinkDownAKilledServiceAndARestartedLoggerAreSur
   const FaultOutcome* killed = FaultOf(rig, FaultKind::kKillShape);
   ASSERT_NE(killed, nullptr);
   EXPECT_EQ(killed->restarts, 1);
+  int restarted = 0;
+  for (const ProgramEnd& program : report.programs) restarted += program.how.ends_with(", restarted");
+  EXPECT_EQ(restarted, 1);
   EXPECT_GT(killed->sensing_outage_s, 0.0);
   if (!e2e::UnderSanitizers()) {
     EXPECT_LE(killed->sensing_outage_s, 2.0);

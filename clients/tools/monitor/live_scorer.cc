@@ -33,6 +33,14 @@ LiveScorer::Percentiles Summarize(std::vector<double> values) {
   return out;
 }
 
+// The trigger time is the camera host's clock: on another host, the
+// shape's age (summed hop by hop on each host's own clock) stands in for
+// receive - trigger, short of the last hop's transit.
+int64_t TriggerToShapeUs(const shape_t& shape, int64_t receive_utime) {
+  if (shape.header.data_age_us > 0) return shape.header.data_age_us;
+  return receive_utime - shape.trigger_utime;
+}
+
 }  // namespace
 
 void LiveScorer::AddTruth(const shape_t& truth) { truths_[truth.trigger_utime] = truth; }
@@ -59,7 +67,8 @@ void LiveScorer::AddShape(const shape_t& shape, int64_t receive_utime) {
   for (const stage_time_t& stage : shape.stage_times) {
     stage_ms_[stage.stage].push_back(static_cast<double>(stage.duration_us) * 1e-3);
   }
-  trigger_to_shape_ms_.push_back(static_cast<double>(receive_utime - shape.trigger_utime) * 1e-3);
+  trigger_to_shape_ms_.push_back(static_cast<double>(TriggerToShapeUs(shape, receive_utime)) *
+                                 1e-3);
   if (!shape.valid) return;
   ++valid_shapes_;
   const shape_t* truth = FindTruth(shape.trigger_utime);

@@ -48,7 +48,8 @@ class LiveScorer {
     double tip_error_mean = 0.0;
     double tip_error_max = 0.0;
     std::map<std::string, Percentiles> stage_ms;          // per stage, from the shapes' stage times
-    Percentiles trigger_to_shape_ms;                      // trigger → shape received
+    // trigger → shape received (on a rig of several hosts: the shape's age at publish)
+    Percentiles trigger_to_shape_ms;
     std::map<std::string, service_status_t> last_status;  // per service
   };
 

@@ -39,6 +39,16 @@ TEST(LiveScorerTest, PairsShapesWithTheTruthOfTheSameTrigger) {
   EXPECT_NEAR(report.trigger_to_shape_ms.p99, 2.0, 1e-9);
 }
 
+// From another host, the trigger time is another clock: the shape's age,
+// summed on each host's own clock, is its latency, whatever the offset.
+TEST(LiveScorerTest, AShapesAgeIsItsLatencyWhateverTheClocks) {
+  LiveScorer scorer(5000);
+  shape_t shape = StraightShape(1'000'000, 0.0);
+  shape.header.data_age_us = 31'000;
+  scorer.AddShape(shape, 1'000'000 - 500'000);  // received on a clock 0.5 s behind
+  EXPECT_NEAR(scorer.Finish(2'000'000).trigger_to_shape_ms.p50, 31.0, 1e-9);
+}
+
 TEST(LiveScorerTest, CountsLostFrameSetsButNotThoseStillInFlight) {
   LiveScorer scorer(5000);
   for (int i = 0; i < 10; ++i) scorer.AddTruth(StraightShape(i * 100'000, 0.0));
