@@ -133,9 +133,8 @@ void ExpectACleanRigRun(const ExperimentReport& report, double camera_offset_ms)
   EXPECT_NEAR(OffsetSeen(rig, kControlHostName, kCameraHostName), camera_offset_ms, 20.0);
   EXPECT_NEAR(OffsetSeen(rig, kCameraHostName, kControlHostName), -camera_offset_ms, 20.0);
   // `rig status` on the operator host saw every expected program up.
-  EXPECT_NE(rig.rig_status_end.find("status 0"), std::string::npos)
-      << rig.rig_status_end << "\n"
-      << rig.rig_status.dump(2);
+  EXPECT_NE(rig.rig_status_end.find("status 0"), std::string::npos) << rig.rig_status_end << "\n"
+                                                                    << rig.rig_status.dump(2);
   // Every program ended cleanly (but the run the faults killed, restarted).
   for (const ProgramEnd& program : report.programs) {
     if (program.how.ends_with(", restarted")) continue;
@@ -225,7 +224,8 @@ TEST_F(ThreeHostClosedLoopTest, ALinkDownAKilledServiceAndARestartedLoggerAreSur
   ASSERT_NE(killed, nullptr);
   EXPECT_EQ(killed->restarts, 1);
   int restarted = 0;
-  for (const ProgramEnd& program : report.programs) restarted += program.how.ends_with(", restarted");
+  for (const ProgramEnd& program : report.programs)
+    restarted += program.how.ends_with(", restarted");
   EXPECT_EQ(restarted, 1);
   EXPECT_GT(killed->sensing_outage_s, 0.0);
   if (!e2e::UnderSanitizers()) {

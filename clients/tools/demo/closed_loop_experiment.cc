@@ -79,18 +79,16 @@ ExperimentFiles FindFiles(const ExperimentArgs& args) {
 // (kPlantLinkTimeoutS): the controller of a run on three hosts.
 ExperimentFiles ConfigForHosts(const ExperimentFiles& files, const fs::path& dir) {
   fs::create_directories(dir);
-  for (const fs::directory_entry& entry :
-       fs::directory_iterator(files.controller.parent_path())) {
+  for (const fs::directory_entry& entry : fs::directory_iterator(files.controller.parent_path())) {
     if (!entry.is_regular_file()) continue;
     fs::copy_file(entry.path(), dir / entry.path().filename(),
                   fs::copy_options::overwrite_existing);
   }
   const fs::path client = dir / files.controller.filename();
-  const auto client_options = OptionsFromYamlText<ControllerClientOptions>(
-      ReadTextFile(client), client.string());
+  const auto client_options =
+      OptionsFromYamlText<ControllerClientOptions>(ReadTextFile(client), client.string());
   const fs::path actuators = dir / client_options.actuators;
-  auto options =
-      OptionsFromYamlText<ActuatorOptions>(ReadTextFile(actuators), actuators.string());
+  auto options = OptionsFromYamlText<ActuatorOptions>(ReadTextFile(actuators), actuators.string());
   options.rig.state_timeout_s = kPlantLinkTimeoutS;
   WriteFileAtomically(actuators,
                       "# Written by `shapesense demo --hosts 3`: config/actuators.yaml with the "
@@ -313,12 +311,12 @@ class HostLayout {
   }
   // `shapesense rig status --once --json` on the operator host.
   ProgramSpec RigStatus(const fs::path& shapesense) const {
-    ProgramSpec spec{"rig-status",
-                     {shapesense.string(), "rig", "status", "--rig", rig_file_.string(), "--once",
-                      "--json"},
-                     "",
-                     "",
-                     true};
+    ProgramSpec spec{
+        "rig-status",
+        {shapesense.string(), "rig", "status", "--rig", rig_file_.string(), "--once", "--json"},
+        "",
+        "",
+        true};
     Place(&spec);
     return spec;
   }
@@ -593,15 +591,14 @@ FaultInjector MakeFaultInjector(const ExperimentArgs& args, const DemoPlan& plan
   for (const ProgramSpec& process : plan.pipeline) {
     if (process.name == "lcm-logger") logger = process;
   }
-  return FaultInjector(args.faults,
-                       {[hosts](bool up) { hosts->SetLink(kControlHostName, up); },
-                        [&processes] { processes.Signal("shape", SIGKILL); },
-                        [&processes, logger] {
-                          processes.Stop(logger.name);
-                          const int64_t between = NowUtime();
-                          processes.Start(logger, kDemoStartTimeout);
-                          return between;
-                        }});
+  return FaultInjector(args.faults, {[hosts](bool up) { hosts->SetLink(kControlHostName, up); },
+                                     [&processes] { processes.Signal("shape", SIGKILL); },
+                                     [&processes, logger] {
+                                       processes.Stop(logger.name);
+                                       const int64_t between = NowUtime();
+                                       processes.Start(logger, kDemoStartTimeout);
+                                       return between;
+                                     }});
 }
 
 // How each fault of the last run went, from the controller's step log and
@@ -622,7 +619,8 @@ void JudgeFaults(const FaultInjector& injector, const ExperimentFiles& files,
     outcome.conduct =
         JudgeConduct(steps, events[i], until, view.setup.controller.watchdog.hold_age);
     outcome.sensing_outage_s = OutageAround(listener.ShapeTimes(), events[i].start_utime);
-    if (events[i].fault.kind == FaultKind::kKillShape) outcome.restarts = processes.restarts("shape");
+    if (events[i].fault.kind == FaultKind::kKillShape)
+      outcome.restarts = processes.restarts("shape");
     rig.faults.push_back(outcome);
   }
 }
@@ -648,7 +646,8 @@ RigNetworkReport DescribeHosts(const VirtualHosts& hosts, const DemoPlan& plan,
   for (const ProgramSpec& process : plan.pipeline) {
     rig.programs[DemoHostOf(process.name)].push_back(process.name);
   }
-  for (const std::string& mode : modes) rig.programs[kControlHostName].push_back("controller-" + mode);
+  for (const std::string& mode : modes)
+    rig.programs[kControlHostName].push_back("controller-" + mode);
   rig.programs[kOperatorHostName].push_back("rig-status");
   return rig;
 }
@@ -756,22 +755,21 @@ nlohmann::json MeanError(const ExperimentReport& report, const std::string& mode
 
 nlohmann::json FaultToJson(const FaultOutcome& fault) {
   const ControllerConduct& c = fault.conduct;
-  nlohmann::json json = {{"kind", FaultName(fault.event.fault.kind)},
-                         {"target", fault.event.fault.target},
-                         {"at_s", fault.at_s},
-                         {"lasted_s", static_cast<double>(fault.event.end_utime -
-                                                          fault.event.start_utime) *
-                                          1e-6},
-                         {"sensing_outage_s", fault.sensing_outage_s},
-                         {"controller",
-                          {{"steps", c.steps},
-                           {"held_steps", c.held_steps},
-                           {"stopped_steps", c.stopped_steps},
-                           {"commands_sent_on_stale_sensing", c.sent_on_stale},
-                           {"max_sensing_age_s", c.max_sensing_age_s},
-                           {"first_hold_after_s", c.first_hold_after_s},
-                           {"first_stop_after_s", c.first_stop_after_s},
-                           {"resumed_after_s", c.resumed_after_s}}}};
+  nlohmann::json json = {
+      {"kind", FaultName(fault.event.fault.kind)},
+      {"target", fault.event.fault.target},
+      {"at_s", fault.at_s},
+      {"lasted_s", static_cast<double>(fault.event.end_utime - fault.event.start_utime) * 1e-6},
+      {"sensing_outage_s", fault.sensing_outage_s},
+      {"controller",
+       {{"steps", c.steps},
+        {"held_steps", c.held_steps},
+        {"stopped_steps", c.stopped_steps},
+        {"commands_sent_on_stale_sensing", c.sent_on_stale},
+        {"max_sensing_age_s", c.max_sensing_age_s},
+        {"first_hold_after_s", c.first_hold_after_s},
+        {"first_stop_after_s", c.first_stop_after_s},
+        {"resumed_after_s", c.resumed_after_s}}}};
   if (fault.event.fault.kind == FaultKind::kKillShape) json["restarts"] = fault.restarts;
   if (fault.event.fault.kind == FaultKind::kRestartLogger) {
     json["log"] = {{"truth_messages", fault.log.messages},
@@ -789,9 +787,8 @@ void AddRigToJson(const RigNetworkReport& rig, nlohmann::json& json) {
     hosts.push_back({{"name", host.name},
                      {"address", rig.addresses.at(host.name)},
                      {"clock_offset_ms", host.clock_offset_ms},
-                     {"programs", programs == rig.programs.end()
-                                      ? std::vector<std::string>{}
-                                      : programs->second}});
+                     {"programs", programs == rig.programs.end() ? std::vector<std::string>{}
+                                                                 : programs->second}});
   }
   json["hosts"] = hosts;
   json["rig_network_bytes_per_s"] = rig.received_bytes_per_s;

@@ -62,11 +62,11 @@ struct ExperimentArgs {
 // How one fault went (experiment_faults.h).
 struct FaultOutcome {
   FaultEvent event;
-  double at_s = 0;                 // from the run's start
-  ControllerConduct conduct;       // from the controller's step log
-  double sensing_outage_s = 0;     // shapes heard by the operator, the gap across the fault
-  int restarts = 0;                // shape_killed: by the supervisor
-  LogContinuity log;               // logger_restarted: the truth in its log
+  double at_s = 0;              // from the run's start
+  ControllerConduct conduct;    // from the controller's step log
+  double sensing_outage_s = 0;  // shapes heard by the operator, the gap across the fault
+  int restarts = 0;             // shape_killed: by the supervisor
+  LogContinuity log;            // logger_restarted: the truth in its log
 };
 
 // What the rig network carried and each host measured (three hosts only).
@@ -100,7 +100,7 @@ struct ExperimentRun {
   std::string first_violation;
   int64_t commands = 0;         // audited
   int64_t commands_missed = 0;  // sent but lost on the way to the audit (by step number)
-  int64_t shapes = 0;    // sensed shapes with q that arrived during the run
+  int64_t shapes = 0;           // sensed shapes with q that arrived during the run
   int targets_sent = 0;
   ProgramEnd end;  // how the controller ended (cleanly, on SIGTERM)
 };

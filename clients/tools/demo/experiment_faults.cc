@@ -127,8 +127,8 @@ std::vector<ControllerStep> ParseControllerSteps(const std::string& csv,
   while (std::getline(stream, line)) {
     const std::vector<std::string> fields = SplitCsvLine(line);
     if (fields.size() < needed) continue;  // a row cut short when the program was killed
-    steps.push_back({std::stoll(fields[utime]), fields[mode], fields[sent] == "1",
-                     std::stod(fields[age])});
+    steps.push_back(
+        {std::stoll(fields[utime]), fields[mode], fields[sent] == "1", std::stod(fields[age])});
   }
   return steps;
 }
@@ -149,8 +149,7 @@ ControllerConduct JudgeConduct(const std::vector<ControllerStep>& steps, const F
       ++conduct.stopped_steps;
       if (conduct.first_stop_after_s < 0) conduct.first_stop_after_s = after;
       held = true;
-    } else if (step.sent && held && step.utime >= event.end_utime &&
-               conduct.resumed_after_s < 0) {
+    } else if (step.sent && held && step.utime >= event.end_utime && conduct.resumed_after_s < 0) {
       conduct.resumed_after_s = SecondsBetween(event.end_utime, step.utime);
     }
     // NaN ages (no sensing yet) compare false: never counted as fresh.

@@ -37,9 +37,9 @@ const char* FaultName(FaultKind kind);  // "control_link_down", "shape_killed", 
 
 struct ExperimentFault {
   FaultKind kind = FaultKind::kControlLinkDown;
-  int target = 1;          // 1-based: during this target's hold
-  double after_s = 1.0;    // into the hold
-  double duration_s = 0;   // the link's time down (the others are instants)
+  int target = 1;         // 1-based: during this target's hold
+  double after_s = 1.0;   // into the hold
+  double duration_s = 0;  // the link's time down (the others are instants)
 };
 
 // One of each, on targets 2, 3 and 4 (fewer targets: as many as fit).
@@ -90,17 +90,16 @@ struct ControllerStep {
   double sensing_age_s = 0;
 };
 // Parses the CSV text; InputError naming `source` when a column is missing.
-std::vector<ControllerStep> ParseControllerSteps(const std::string& csv,
-                                                 const std::string& source);
+std::vector<ControllerStep> ParseControllerSteps(const std::string& csv, const std::string& source);
 
 // What the controller did around one fault, from its steps.
 struct ControllerConduct {
-  int64_t steps = 0;           // from the fault's start to `until`
-  int64_t held_steps = 0;      // mode hold
-  int64_t stopped_steps = 0;   // mode stop
-  int64_t sent_on_stale = 0;   // commands sent with sensing >= hold_age: must be 0
+  int64_t steps = 0;          // from the fault's start to `until`
+  int64_t held_steps = 0;     // mode hold
+  int64_t stopped_steps = 0;  // mode stop
+  int64_t sent_on_stale = 0;  // commands sent with sensing >= hold_age: must be 0
   double max_sensing_age_s = 0;
-  double first_hold_after_s = -1;   // from the fault's start (-1: none)
+  double first_hold_after_s = -1;  // from the fault's start (-1: none)
   double first_stop_after_s = -1;
   // The first command sent after it held or stopped, from the fault's end (-1: none).
   double resumed_after_s = -1;
@@ -120,8 +119,8 @@ LogContinuity JudgeContinuity(const std::vector<std::vector<int64_t>>& segments)
 
 // A log's (receive time, sequence number) pairs split at `splits` (µs,
 // increasing): one segment per interval.
-std::vector<std::vector<int64_t>> SplitAt(
-    const std::vector<std::pair<int64_t, int64_t>>& logged, const std::vector<int64_t>& splits);
+std::vector<std::vector<int64_t>> SplitAt(const std::vector<std::pair<int64_t, int64_t>>& logged,
+                                          const std::vector<int64_t>& splits);
 
 // The largest gap between consecutive times (µs) that spans `at_utime`, s;
 // 0 when none does.

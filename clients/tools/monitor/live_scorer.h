@@ -47,7 +47,7 @@ class LiveScorer {
     double centerline_rms_max = 0.0;
     double tip_error_mean = 0.0;
     double tip_error_max = 0.0;
-    std::map<std::string, Percentiles> stage_ms;          // per stage, from the shapes' stage times
+    std::map<std::string, Percentiles> stage_ms;  // per stage, from the shapes' stage times
     // trigger → shape received (on a rig of several hosts: the shape's age at publish)
     Percentiles trigger_to_shape_ms;
     std::map<std::string, service_status_t> last_status;  // per service

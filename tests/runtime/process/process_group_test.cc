@@ -125,7 +125,6 @@ TEST_F(ProcessGroupTest, AProgramThatEndsWhileRunningIsNamed) {
   EXPECT_NE(message.find("out of memory"), std::string::npos) << message;
 }
 
-
 // The stand-in for systemd's Restart=on-failure: a program killed outright
 // is started again, its end recorded, its output kept in the same log.
 TEST_F(ProcessGroupTest, AProgramToRestartIsStartedAgainAfterItsEnd) {
@@ -142,8 +141,7 @@ TEST_F(ProcessGroupTest, AProgramToRestartIsStartedAgainAfterItsEnd) {
   EXPECT_EQ(processes.restarts("flaky"), 1);
   EXPECT_GT(processes.last_restart_utime("flaky"), 0);
   ASSERT_EQ(processes.ends().size(), 1u);
-  EXPECT_NE(processes.ends()[0].how.find("signal 9"), std::string::npos)
-      << processes.ends()[0].how;
+  EXPECT_NE(processes.ends()[0].how.find("signal 9"), std::string::npos) << processes.ends()[0].how;
   EXPECT_NE(processes.ends()[0].how.find("restarted"), std::string::npos);
   EXPECT_TRUE(processes.IsRunning("flaky"));
   EXPECT_TRUE(processes.Stop("flaky").clean);

@@ -16,7 +16,8 @@ namespace shapesense {
 namespace {
 
 TEST(DemoHostsTest, TheRigFileItWritesPassesTheChecks) {
-  const std::string text = DemoRigFileText({"cam0", "cam1", "cam2"}, "udpm://239.255.76.67:7667?ttl=0");
+  const std::string text =
+      DemoRigFileText({"cam0", "cam1", "cam2"}, "udpm://239.255.76.67:7667?ttl=0");
   const RigFile rig = ParseRigFile(text, "rig_hosts.yaml");
   EXPECT_EQ(CheckRig(rig), std::vector<std::string>{});
   ASSERT_EQ(rig.hosts.size(), 3u);
@@ -48,8 +49,9 @@ TEST(ExperimentFaultsTest, TheStandardFaultsFitFiveSecondHoldsAndBadOnesAreNamed
   EXPECT_EQ(StandardFaults(2).size(), 1u);
   EXPECT_NE(CheckFaults(StandardFaults(4), Targets(4, 3.0)).find("control_link_down"),
             std::string::npos);
-  EXPECT_NE(CheckFaults({{FaultKind::kKillShape, 7, 1.0, 0.0}}, Targets(4, 5.0)).find("no target 7"),
-            std::string::npos);
+  EXPECT_NE(
+      CheckFaults({{FaultKind::kKillShape, 7, 1.0, 0.0}}, Targets(4, 5.0)).find("no target 7"),
+      std::string::npos);
 }
 
 TEST(ExperimentFaultsTest, TheInjectorMakesEachFaultOnceAtItsTimeAndBringsTheLinkBack) {
@@ -130,8 +132,8 @@ TEST(ExperimentFaultsTest, TheLogsGapIsCountedAndALossWhileLoggingIsFound) {
 }
 
 TEST(ExperimentFaultsTest, OneLogIsSplitIntoTheLoggersRunsAtItsRestarts) {
-  const std::vector<std::pair<int64_t, int64_t>> logged = {
-      {100, 1}, {200, 2}, {300, 3}, {700, 8}, {800, 9}, {1200, 14}};
+  const std::vector<std::pair<int64_t, int64_t>> logged = {{100, 1}, {200, 2}, {300, 3},
+                                                           {700, 8}, {800, 9}, {1200, 14}};
   const auto segments = SplitAt(logged, {500, 1000});
   EXPECT_EQ(segments, (std::vector<std::vector<int64_t>>{{1, 2, 3}, {8, 9}, {14}}));
   const LogContinuity continuity = JudgeContinuity(segments);
