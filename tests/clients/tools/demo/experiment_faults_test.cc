@@ -40,6 +40,7 @@ TEST(DemoHostsTest, EveryProgramOfThePlanHasItsHost) {
 
 std::vector<ExperimentTarget> Targets(int count, double hold_s) {
   std::vector<ExperimentTarget> targets;
+  targets.reserve(static_cast<size_t>(count));
   for (int i = 0; i < count; ++i) targets.push_back({1.0 + i * hold_s, 1.0 + (i + 1) * hold_s, {}});
   return targets;
 }

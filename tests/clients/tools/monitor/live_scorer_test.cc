@@ -51,10 +51,10 @@ TEST(LiveScorerTest, AShapesAgeIsItsLatencyWhateverTheClocks) {
 
 TEST(LiveScorerTest, CountsLostFrameSetsButNotThoseStillInFlight) {
   LiveScorer scorer(5000);
-  for (int i = 0; i < 10; ++i) scorer.AddTruth(StraightShape(i * 100'000, 0.0));
-  for (int i : {0, 1, 2, 5, 6})
+  for (int64_t i = 0; i < 10; ++i) scorer.AddTruth(StraightShape(i * 100'000, 0.0));
+  for (const int64_t i : {0, 1, 2, 5, 6})
     scorer.AddShape(StraightShape(i * 100'000, 0.1), i * 100'000 + 1000);
-  scorer.AddShape(StraightShape(3 * 100'000, 0.1, /*valid=*/false), 0);
+  scorer.AddShape(StraightShape(int64_t{3} * 100'000, 0.1, /*valid=*/false), 0);
   // The run ended at 1.0 s: truths at 0.6 s and later are within the grace period.
   const LiveScorer::Report report = scorer.Finish(1'000'000, 450'000);
   EXPECT_EQ(report.matched, 5);
