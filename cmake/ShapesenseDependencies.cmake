@@ -49,6 +49,10 @@ shapesense_require(LIBV4L2_FOUND "libv4l-dev" "libv4l2")
 pkg_check_modules(LIBSYSTEMD QUIET IMPORTED_TARGET libsystemd)
 shapesense_require(LIBSYSTEMD_FOUND "libsystemd-dev" "libsystemd")
 
+# HMAC-SHA256 for the messages that move the robot (libs/security).
+find_package(OpenSSL QUIET COMPONENTS Crypto)
+shapesense_require(OPENSSL_FOUND "libssl-dev" "OpenSSL (libcrypto)")
+
 if(SHAPESENSE_BUILD_TESTS)
   find_package(GTest QUIET)
   shapesense_require(GTest_FOUND "libgtest-dev libgmock-dev" "GoogleTest")

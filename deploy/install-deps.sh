@@ -14,6 +14,7 @@ PACKAGES=(
   libgtest-dev libgmock-dev googletest libbenchmark-dev
   iproute2 socat
   libsystemd-dev systemd
+  libssl-dev
   clang-format clang-tidy
 )
 
