@@ -7,6 +7,7 @@
 #include "clients/tools/config_command.h"
 #include "clients/tools/demo_command.h"
 #include "clients/tools/estimate/estimate_command.h"
+#include "clients/tools/keygen_command.h"
 #include "clients/tools/monitor/monitor_command.h"
 #include "clients/tools/offline_command.h"
 #include "clients/tools/replay/replay_command.h"
@@ -25,6 +26,7 @@ int main(int argc, char** argv) {
   shapesense::AddMonitorCommand(app);
   shapesense::AddReplayCommand(app);
   shapesense::AddRigCommand(app);
+  shapesense::AddKeygenCommand(app);
   // The subcommands run inside the parse (their callbacks), so their errors
   // come out of it too.
   try {
