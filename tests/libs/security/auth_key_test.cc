@@ -7,17 +7,10 @@
 
 #include "libs/core/error.h"
 #include "libs/security/replay_window.h"
+#include "tests/libs/security/test_keys.h"
 
 namespace shapesense {
 namespace {
-
-AuthKey Key(uint32_t id, uint8_t fill) {
-  AuthKey key;
-  key.id = id;
-  key.secret.fill(fill);
-  key.secret[0] = static_cast<uint8_t>(id);
-  return key;
-}
 
 // The message of the InputError `text` gets, "" when none.
 std::string ErrorOf(const std::string& text) {
@@ -30,7 +23,7 @@ std::string ErrorOf(const std::string& text) {
 }
 
 TEST(AuthKeyTest, ItsTextReadsBackExactly) {
-  const AuthKey key = Key(7, 0xa5);
+  const AuthKey key = testing::TestKey(7, 0xa5);
   const AuthKey back = ParseKeyText(FormatKeyText(key), "rig.key");
   EXPECT_EQ(back.id, 7u);
   EXPECT_EQ(back.secret, key.secret);
@@ -51,14 +44,15 @@ TEST(AuthKeyTest, MistakesAreNamedButTheSecretIsNever) {
 }
 
 TEST(AuthKeyTest, ARingHoldsTheCurrentKeyAndTheOneItReplaces) {
-  const KeyRing ring({Key(1, 1), Key(2, 2)});
+  const KeyRing ring({testing::TestKey(1, 1), testing::TestKey(2, 2)});
   EXPECT_EQ(ring.signing().id, 2u);
   ASSERT_NE(ring.Find(1), nullptr);
-  EXPECT_EQ(ring.Find(1)->secret, Key(1, 1).secret);
+  EXPECT_EQ(ring.Find(1)->secret, testing::TestKey(1, 1).secret);
   EXPECT_EQ(ring.Find(3), nullptr);
   EXPECT_THROW(KeyRing({}), InputError);
-  EXPECT_THROW(KeyRing({Key(1, 1), Key(2, 2), Key(3, 3)}), InputError);
-  EXPECT_THROW(KeyRing({Key(1, 1), Key(1, 2)}), InputError);
+  EXPECT_THROW(KeyRing({testing::TestKey(1, 1), testing::TestKey(2, 2), testing::TestKey(3, 3)}),
+               InputError);
+  EXPECT_THROW(KeyRing({testing::TestKey(1, 1), testing::TestKey(1, 2)}), InputError);
 }
 
 TEST(ReplayWindowTest, FreshOnceWithinTheWindowReplayedAfterTooOldBelowIt) {

@@ -8,15 +8,10 @@
 
 #include <vector>
 
+#include "tests/libs/security/test_keys.h"
+
 namespace shapesense {
 namespace {
-
-AuthKey Key(uint32_t id, uint8_t fill) {
-  AuthKey key;
-  key.id = id;
-  key.secret.fill(fill);
-  return key;
-}
 
 // A stand-in for an encoded message: 8 bytes of fingerprint, a body, the
 // MAC field, more body.
@@ -45,8 +40,8 @@ std::optional<AuthRejection> Verify(MessageVerifier& verifier, const std::string
 }
 
 TEST(MessageAuthTest, ASignedMessageIsAcceptedOnceAndOnItsChannelOnly) {
-  MessageSigner signer(KeyRing({Key(1, 0x11)}), "control/controller", 1000);
-  MessageVerifier verifier(KeyRing({Key(1, 0x11)}));
+  MessageSigner signer(KeyRing({testing::TestKey(1, 0x11)}), "control/controller", 1000);
+  MessageVerifier verifier(KeyRing({testing::TestKey(1, 0x11)}));
   const Signed first = Sign(signer, "SHAPESENSE_TARGET");
   EXPECT_EQ(Verify(verifier, "SHAPESENSE_TARGET", first), std::nullopt);
   EXPECT_EQ(Verify(verifier, "SHAPESENSE_TARGET", first), AuthRejection::kReplayed);
@@ -59,9 +54,9 @@ TEST(MessageAuthTest, ASignedMessageIsAcceptedOnceAndOnItsChannelOnly) {
 }
 
 TEST(MessageAuthTest, UnsignedUnknownKeysAndForgedTagsAreRejected) {
-  MessageSigner signer(KeyRing({Key(1, 0x11)}), "operator/demo", 1);
-  MessageSigner stranger(KeyRing({Key(9, 0x99)}), "operator/demo", 1);
-  MessageVerifier verifier(KeyRing({Key(1, 0x11)}));
+  MessageSigner signer(KeyRing({testing::TestKey(1, 0x11)}), "operator/demo", 1);
+  MessageSigner stranger(KeyRing({testing::TestKey(9, 0x99)}), "operator/demo", 1);
+  MessageVerifier verifier(KeyRing({testing::TestKey(1, 0x11)}));
   Signed message = Sign(signer, "C");
   Signed unsigned_message = message;
   unsigned_message.tag.sender.clear();
@@ -79,10 +74,10 @@ TEST(MessageAuthTest, UnsignedUnknownKeysAndForgedTagsAreRejected) {
 }
 
 TEST(MessageAuthTest, EverySingleBitFlipIsRejected) {
-  MessageSigner signer(KeyRing({Key(1, 0x11)}), "camera/shape", 1);
+  MessageSigner signer(KeyRing({testing::TestKey(1, 0x11)}), "camera/shape", 1);
   const Signed message = Sign(signer, "SHAPESENSE_SHAPE");
   for (size_t bit = 0; bit < message.bytes.size() * 8; ++bit) {
-    MessageVerifier verifier(KeyRing({Key(1, 0x11)}));
+    MessageVerifier verifier(KeyRing({testing::TestKey(1, 0x11)}));
     Signed flipped = message;
     flipped.bytes[bit / 8] ^= static_cast<uint8_t>(1u << (bit % 8));
     EXPECT_EQ(Verify(verifier, "SHAPESENSE_SHAPE", flipped), AuthRejection::kBadMac) << bit;
@@ -90,15 +85,16 @@ TEST(MessageAuthTest, EverySingleBitFlipIsRejected) {
 }
 
 TEST(MessageAuthTest, DuringARotationBothKeysVerifyAndTheNewOneSigns) {
-  MessageSigner old_signer(KeyRing({Key(1, 0x11)}), "control/controller", 1);
-  MessageSigner new_signer(KeyRing({Key(1, 0x11), Key(2, 0x22)}), "operator/demo", 1);
-  MessageVerifier verifier(KeyRing({Key(1, 0x11), Key(2, 0x22)}));
+  MessageSigner old_signer(KeyRing({testing::TestKey(1, 0x11)}), "control/controller", 1);
+  MessageSigner new_signer(KeyRing({testing::TestKey(1, 0x11), testing::TestKey(2, 0x22)}),
+                           "operator/demo", 1);
+  MessageVerifier verifier(KeyRing({testing::TestKey(1, 0x11), testing::TestKey(2, 0x22)}));
   const Signed old_message = Sign(old_signer, "C");
   const Signed new_message = Sign(new_signer, "C");
   EXPECT_EQ(new_message.tag.key_id, 2u);
   EXPECT_EQ(Verify(verifier, "C", old_message), std::nullopt);
   EXPECT_EQ(Verify(verifier, "C", new_message), std::nullopt);
-  MessageVerifier rotated(KeyRing({Key(2, 0x22)}));
+  MessageVerifier rotated(KeyRing({testing::TestKey(2, 0x22)}));
   EXPECT_EQ(Verify(rotated, "C", Sign(old_signer, "C")), AuthRejection::kUnknownKey);
 }
 
