@@ -231,8 +231,13 @@ TEST_F(ThreeHostClosedLoopTest, ALinkDownAKilledServiceAndARestartedLoggerAreSur
   if (!e2e::UnderSanitizers()) {
     EXPECT_LE(killed->sensing_outage_s, 2.0);
   }
-  EXPECT_GE(killed->conduct.held_steps, 1) << "the controller held while the shapes were away";
-  EXPECT_GE(killed->conduct.resumed_after_s, 0.0);
+  // A restart quicker than the hold age leaves the sensing fresh enough to
+  // go on; a slower one makes the controller hold (no command goes out on
+  // stale sensing: checked above for every fault) and move again after.
+  if (killed->conduct.max_sensing_age_s >= hold_age) {
+    EXPECT_GE(killed->conduct.held_steps + killed->conduct.stopped_steps, 1);
+    EXPECT_GE(killed->conduct.resumed_after_s, 0.0) << "the controller moved again";
+  }
 
   // The logger restarted: every frame-set's truth before and after, the gap counted.
   const FaultOutcome* logger = FaultOf(rig, FaultKind::kRestartLogger);
