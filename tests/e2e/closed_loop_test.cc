@@ -3,7 +3,7 @@
 // off the controller's model, with play on its tendons) behind three fake
 // GigE cameras, capture, carving, shape sensing q and lcm-logger as separate
 // programs over UDP multicast; shapesense-controller drives the plant through
-// 20 targets across the workspace, in open loop and then closed loop on the
+// 12 targets across the workspace, in open loop and then closed loop on the
 // sensed shape. The same code as `shapesense demo`
 // (clients/tools/demo/closed_loop_experiment.h).
 //
@@ -82,7 +82,7 @@ TEST_F(ClosedLoopTest, ClosedLoopReachesTheTargetsWithinAMillimetreWhereOpenLoop
     args.targets.count = 4;
     args.targets.hold_s = 8.0;
   } else {
-    args.targets.count = 20;
+    args.targets.count = 12;  // the demo runs 20; 12 keep CI short and the mean steady
     args.targets.hold_s = 5.0;
   }
   std::ostringstream log;
