@@ -7,7 +7,23 @@ bash "$ROOT/deploy/install-deps.sh"
 bash "$ROOT/deploy/socket-buffers.sh"   # the multi-process tests carry camera images over LCM
 
 bash "$ROOT/deploy/build.sh" release
-(cd "$ROOT/build" && ctest --output-on-failure -j 2)
+(cd "$ROOT/build" && ctest --output-on-failure -j 2 -LE e2e)
+
+# The end-to-end tests run one at a time and are made to hold with one core
+# kept busy (tests/e2e): meanwhile the sanitizer build takes that core, in
+# a process group of its own (its output in build-asan/background.log),
+# stopped once they are done; then it goes on with every core.
+mkdir -p "$ROOT/build-asan"
+JOBS=1 setsid bash "$ROOT/deploy/build.sh" asan > "$ROOT/build-asan/background.log" 2>&1 &
+ASAN_BUILD=$!
+stop_asan_build() {
+  kill -INT -- "-$ASAN_BUILD" 2> /dev/null || true
+  wait "$ASAN_BUILD" 2> /dev/null || true
+}
+trap stop_asan_build EXIT
+(cd "$ROOT/build" && ctest --output-on-failure -L e2e)
+stop_asan_build
+trap - EXIT
 
 bash "$ROOT/deploy/build.sh" asan
 export ASAN_OPTIONS=detect_leaks=1:abort_on_error=1
