@@ -65,7 +65,9 @@ AuthKey ParseKeyText(const std::string& text, const std::string& source) {
       secret = ParseSecret(value, source);
     } else {
       // Only the part before the colon: a mangled secret line stays unshown.
-      throw InputError(source + ": unknown key '" + key + "' (expected key_id and secret)");
+      std::string message = source;
+      message += ": unknown key '" + key + "' (expected key_id and secret)";
+      throw InputError(message);
     }
   }
   if (!id) throw InputError(source + ": no key_id");

@@ -120,7 +120,7 @@ fs::path ControllerConfigForHosts(const fs::path& controller_config, const fs::p
     fs::copy_file(entry.path(), dir / entry.path().filename(),
                   fs::copy_options::overwrite_existing);
   }
-  const fs::path client = dir / controller_config.filename();
+  fs::path client = dir / controller_config.filename();
   const auto client_options =
       OptionsFromYamlText<ControllerClientOptions>(ReadTextFile(client), client.string());
   const fs::path actuators = dir / client_options.actuators;

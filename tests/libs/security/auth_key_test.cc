@@ -30,12 +30,14 @@ TEST(AuthKeyTest, ItsTextReadsBackExactly) {
 }
 
 TEST(AuthKeyTest, MistakesAreNamedButTheSecretIsNever) {
-  const std::string secret(63, 'c');
+  const std::string short_secret(63, 'c');
+  const std::string secret = short_secret + "c";
+  const std::string password = "password: " + short_secret + "\n";
+  const std::string good = "key_id: 1\nsecret: " + secret + "\n";
   for (const std::string& text :
-       {"key_id: 1\nsecret: " + secret + "\n", "key_id: 1\nsecret: " + secret + "z\n",
-        "key_id: x1\nsecret: " + secret + "c\n", "secret: " + secret + "c\n",
-        std::string("key_id: 1\n"),
-        "key_id: 1\nsecret: " + secret + "c\npassword: " + secret + "\n"}) {
+       {"key_id: 1\nsecret: " + short_secret + "\n", "key_id: 1\nsecret: " + short_secret + "z\n",
+        "key_id: x1\nsecret: " + secret + "\n", "secret: " + secret + "\n",
+        std::string("key_id: 1\n"), good + password}) {
     const std::string error = ErrorOf(text);
     EXPECT_NE(error, "") << text;
     EXPECT_NE(error.find("rig.key"), std::string::npos) << error;
