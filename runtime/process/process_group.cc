@@ -14,6 +14,9 @@ namespace {
 
 constexpr int kTailLines = 12;
 constexpr auto kStopGrace = std::chrono::milliseconds(10000);
+// A program restarted this often is failing, not faulted: as systemd's
+// StartLimitBurst, the group gives up on it (deploy/systemd: 5 in 60 s).
+constexpr int kMostRestarts = 5;
 
 std::string Indented(const std::string& text) {
   std::string out = "    ";
@@ -121,8 +124,11 @@ void ProcessGroup::CheckRunning() {
     // A one-off job may end; Stop() records how.
     if (running.process.runs_to_end) continue;
     if (const std::optional<int> status = running.child->ExitStatus()) {
-      if (!running.process.restart) {
-        throw Failure(running, DescribeExitStatus(*status) + " while the demo ran");
+      if (!running.process.restart || running.restarts >= kMostRestarts) {
+        throw Failure(running, DescribeExitStatus(*status) + " while the demo ran" +
+                                   (running.process.restart
+                                        ? ", after " + std::to_string(kMostRestarts) + " restarts"
+                                        : ""));
       }
       Restart(running, *status);
     }

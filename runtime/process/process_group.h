@@ -44,7 +44,7 @@ struct ProgramSpec {
   std::vector<std::pair<std::string, std::string>> environment = {};
   // Started again, at once, whenever it ends while the group runs: a stand-in
   // for systemd's Restart=on-failure in the tests and the demo's faults. Its
-  // output goes on in the same log.
+  // output goes on in the same log. An end after 5 restarts is a failure.
   bool restart = false;
 };
 

@@ -82,7 +82,7 @@ TEST_F(ClosedLoopTest, ClosedLoopReachesTheTargetsWithinAMillimetreWhereOpenLoop
     args.targets.count = 4;
     args.targets.hold_s = 8.0;
   } else {
-    args.targets.count = 12;  // the demo runs 20; 12 keep CI short and the mean steady
+    args.targets.count = 12;  // the demo runs 20; 12 give a steady mean in less time
     args.targets.hold_s = 5.0;
   }
   std::ostringstream log;

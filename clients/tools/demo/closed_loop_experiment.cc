@@ -479,12 +479,12 @@ bool RunPhases(const ExperimentArgs& args, const ExperimentParts& parts,
     PrintRunSummary(report.runs.back(), log);
     if (extras.faults != nullptr) {
       const FaultEvidence evidence{
-          parts.settings.out / mode / "controller_log.csv",
-          parts.listener.ShapeTimes(),
+          parts.settings.out / mode / "controller_log.csv", parts.listener.ShapeTimes(),
           parts.processes.restarts("shape"),
           ControllerView(parts.files.controller).setup.controller.watchdog.hold_age,
           driver.origin(),
-          NowUtime()};
+          // The last hold's end: the controller's own stop after it is no fault's doing.
+          driver.origin() + static_cast<int64_t>(report.targets.back().end_s * 1e6)};
       JudgeFaults(faults, evidence, *report.rig);
     }
   }

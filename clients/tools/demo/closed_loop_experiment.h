@@ -64,7 +64,7 @@ struct FaultOutcome {
   FaultEvent event;
   double at_s = 0;              // from the run's start
   ControllerConduct conduct;    // from the controller's step log
-  double sensing_outage_s = 0;  // shapes heard by the operator, the gap across the fault
+  double sensing_outage_s = 0;  // shape_killed: the gap in the shapes the operator heard
   int restarts = 0;             // shape_killed: by the supervisor
   LogContinuity log;            // logger_restarted: the truth in its log
 };

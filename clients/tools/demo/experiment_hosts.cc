@@ -59,7 +59,6 @@ nlohmann::json FaultToJson(const FaultOutcome& fault) {
       {"target", fault.event.fault.target},
       {"at_s", fault.at_s},
       {"lasted_s", static_cast<double>(fault.event.end_utime - fault.event.start_utime) * 1e-6},
-      {"sensing_outage_s", fault.sensing_outage_s},
       {"controller",
        {{"steps", c.steps},
         {"held_steps", c.held_steps},
@@ -69,7 +68,10 @@ nlohmann::json FaultToJson(const FaultOutcome& fault) {
         {"first_hold_after_s", c.first_hold_after_s},
         {"first_stop_after_s", c.first_stop_after_s},
         {"resumed_after_s", c.resumed_after_s}}}};
-  if (fault.event.fault.kind == FaultKind::kKillShape) json["restarts"] = fault.restarts;
+  if (fault.event.fault.kind == FaultKind::kKillShape) {
+    json["restarts"] = fault.restarts;
+    json["sensing_outage_s"] = fault.sensing_outage_s;
+  }
   if (fault.event.fault.kind == FaultKind::kRestartLogger) {
     json["log"] = {{"truth_messages", fault.log.messages},
                    {"missing_while_logging", fault.log.missing_within_runs},
@@ -187,8 +189,12 @@ void JudgeFaults(const FaultInjector& injector, const FaultEvidence& evidence,
     outcome.at_s = static_cast<double>(events[i].start_utime - evidence.origin_utime) * 1e-6;
     const int64_t until = i + 1 < events.size() ? events[i + 1].start_utime : evidence.end_utime;
     outcome.conduct = JudgeConduct(steps, events[i], until, evidence.hold_age_s);
-    outcome.sensing_outage_s = OutageAround(evidence.shape_times, events[i].start_utime);
-    if (events[i].fault.kind == FaultKind::kKillShape) outcome.restarts = evidence.shape_restarts;
+    // The shapes as the operator heard them: an outage of the shape service
+    // only (a pulled control link is the controller's, seen in its steps).
+    if (events[i].fault.kind == FaultKind::kKillShape) {
+      outcome.sensing_outage_s = OutageAround(evidence.shape_times, events[i].start_utime);
+      outcome.restarts = evidence.shape_restarts;
+    }
     rig.faults.push_back(outcome);
   }
 }
@@ -235,9 +241,9 @@ void RigNetworkWatch::End(RigNetworkReport& rig) const {
   rig.received_bytes_per_s = static_cast<double>(end.received - begin_.received) / seconds;
   rig.sent_bytes_per_s = static_cast<double>(end.sent - begin_.sent) / seconds;
   rig.channel_messages = census_->Counts();
-  const std::string images = std::string(channels::kImagePattern).substr(0, 17);
+  const std::string images = channels::Image("");  // the channels' common start
   for (const auto& [channel, count] : rig.channel_messages) {
-    if (channel.find(images) != std::string::npos) rig.image_messages += count;
+    if (channel.starts_with(images)) rig.image_messages += count;
   }
 }
 

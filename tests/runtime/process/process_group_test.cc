@@ -155,6 +155,22 @@ TEST_F(ProcessGroupTest, AProgramToRestartIsStartedAgainAfterItsEnd) {
     ++starts;
   EXPECT_EQ(starts, 2u) << text;
 }
+// As systemd's start limit: a program that keeps ending is a failure.
+TEST_F(ProcessGroupTest, AProgramThatKeepsEndingIsAFailureAfterFiveRestarts) {
+  ProcessGroup processes(logs_, stop_, Hooks());
+  ProgramSpec crashing = Sh("crashing", "echo up; sleep 0.05; exit 3");
+  crashing.ready_line = "up";
+  crashing.restart = true;
+  ASSERT_TRUE(processes.Start(crashing, seconds(30)));
+  std::string message;
+  for (int i = 0; i < 1000 && message.empty(); ++i) {
+    message = FailureOf([&] { processes.CheckRunning(); });
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  }
+  EXPECT_EQ(processes.restarts("crashing"), 5);
+  EXPECT_NE(message.find("after 5 restarts"), std::string::npos) << message;
+}
+
 TEST_F(ProcessGroupTest, StoppedLastStartedFirst) {
   std::vector<std::string> names = {"rig-sim", "lcm-logger", "carving", "shape", "capture"};
   {
