@@ -8,6 +8,7 @@ namespace {
 
 // Sizes on the wire (LCM encodes big-endian, booleans as one byte).
 constexpr size_t kHash = 8;
+constexpr size_t kMacBytes = 32;   // auth_t.mac
 constexpr size_t kStageTail = 16;  // stage_time_t after its name: duration_us, end_utime
 // width, height, row_stride, pixel_format, compression, exposure_us, gain_db,
 // trigger_seq, trigger_utime, frame_id, device_timestamp_ns, host_utime
@@ -49,8 +50,12 @@ class WireWalker {
     int64_t length = 0;
     return Count(&length) && length >= 1 && Skip(static_cast<size_t>(length));
   }
-  // The type's hash, then header_t: seq, utime, host, data_age_us.
-  bool HashAndHeader() { return Skip(kHash + 8 + 8) && SkipString() && Skip(8); }
+  // The type's hash, then header_t: seq, utime, host, data_age_us, and its
+  // auth_t: key_id, sender, counter, mac.
+  bool HashAndHeader() {
+    return Skip(kHash + 8 + 8) && SkipString() && Skip(8 + 4) && SkipString() &&
+           Skip(8 + kMacBytes);
+  }
   bool StageTimes() {
     int64_t count = 0;
     if (!Count(&count)) return false;

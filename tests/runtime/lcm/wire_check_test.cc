@@ -209,8 +209,9 @@ TEST(WireCheckTest, WrongTypesAndGarbageAreRefused) {
   status.service = "carving";
   std::vector<uint8_t> bytes = Encode(status);
   EXPECT_EQ(DecodeMessage(bytes.data(), bytes.size(), &status), "");
-  // After the hash and the header (seq, utime, an empty host, data_age_us):
-  bytes[8 + 8 + 8 + 5 + 8] = 0xFF;  // the service name's length: negative
+  // After the hash and the header (with its auth):
+  bytes[8 + static_cast<size_t>(status.header._getEncodedSizeNoHash())] =
+      0xFF;  // the service name's length: negative
   EXPECT_NE(DecodeMessage(bytes.data(), bytes.size(), &status), "");
 }
 

@@ -207,7 +207,8 @@ TEST(TendonWireCheckTest, CountsThatDoNotFitTheBufferAreRefused) {
   // A count of two billion tendons in a 40-byte buffer: refused before any allocation.
   tendon_state_t state{};
   std::vector<uint8_t> bytes = Encode(state);
-  bytes[8 + 8 + 8 + 5 + 8] = 0x7f;  // past the hash and the header (its host empty)
+  // Past the hash and the header.
+  bytes[8 + static_cast<size_t>(state.header._getEncodedSizeNoHash())] = 0x7f;
   tendon_state_t decoded;
   EXPECT_THAT(DecodeMessage(bytes.data(), bytes.size(), &decoded), HasSubstr("lengths do not fit"));
 }

@@ -182,8 +182,9 @@ TEST_F(ShapeServiceTest, MalformedMessagesOnEveryChannelAreCountedAndNeverStopIt
   bus_.Publish(channels::kVoxels, RawBytes{std::vector<uint8_t>(bytes.begin(), bytes.end() - 5)});
   bus_.Publish(channels::kVoxels, RawBytes{std::vector<uint8_t>(64, 0xEE)});
   std::vector<uint8_t> huge = bytes;
-  // num_voxels, past the hash, the header (its host empty) and the fixed fields.
-  const size_t count = 8 + (8 + 8 + 5 + 8) + 8 + 8 + 24 + 8 + 12;
+  // num_voxels, past the hash, the header and the fixed fields.
+  const size_t count =
+      8 + static_cast<size_t>(good.header._getEncodedSizeNoHash()) + 8 + 8 + 24 + 8 + 12;
   huge.at(count) = 0x7F;
   bus_.Publish(channels::kVoxels, RawBytes{huge});
   rejected += 4;
