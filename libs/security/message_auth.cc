@@ -1,5 +1,6 @@
 #include "libs/security/message_auth.h"
 
+#include <algorithm>
 #include <stdexcept>
 #include <vector>
 
@@ -34,6 +35,12 @@ Mac MessageMac(const AuthKey& key, std::string_view channel, std::span<const uin
   return HmacSha256(key.secret, parts);
 }
 
+bool FirstContactRule::Admits(uint64_t counter, int64_t now_utime) const {
+  if (receiver_start_utime == 0) return true;
+  const int64_t floor = std::max(receiver_start_utime, now_utime - max_age_us) - clock_tolerance_us;
+  return counter >= static_cast<uint64_t>(std::max<int64_t>(floor, 0));
+}
+
 const char* AuthRejectionName(AuthRejection rejection) {
   switch (rejection) {
     case AuthRejection::kUnsigned:
@@ -54,7 +61,7 @@ const char* AuthRejectionName(AuthRejection rejection) {
 
 std::optional<AuthRejection> MessageVerifier::Verify(std::string_view channel, const AuthTag& tag,
                                                      std::span<const uint8_t> encoded,
-                                                     size_t mac_offset) {
+                                                     size_t mac_offset, int64_t now_utime) {
   if (tag.sender.empty()) return Reject(AuthRejection::kUnsigned);
   const AuthKey* key = keys_.Find(tag.key_id);
   if (key == nullptr) return Reject(AuthRejection::kUnknownKey);
@@ -65,7 +72,13 @@ std::optional<AuthRejection> MessageVerifier::Verify(std::string_view channel, c
   if (!MacsEqual(expected, encoded.subspan(mac_offset, kMacBytes))) {
     return Reject(AuthRejection::kBadMac);
   }
-  switch (windows_[tag.sender].Accept(tag.counter)) {
+  const auto window_key = std::make_pair(tag.sender, std::string(channel));
+  const auto window = windows_.find(window_key);
+  if (window == windows_.end() && !first_contact_.Admits(tag.counter, now_utime)) {
+    return Reject(AuthRejection::kTooOld);
+  }
+  ReplayWindow& replay = window != windows_.end() ? window->second : windows_[window_key];
+  switch (replay.Accept(tag.counter)) {
     case ReplayWindow::Verdict::kFresh:
       ++accepted_;
       return std::nullopt;

@@ -2,11 +2,14 @@
 
 #include <poll.h>
 
+#include <atomic>
 #include <cstdlib>
+#include <iostream>
 #include <stdexcept>
 
 #include "runtime/host_clock.h"
 #include "runtime/lcm/lcm_url.h"
+#include "runtime/security/key_file.h"
 
 namespace shapesense {
 namespace {
@@ -41,6 +44,49 @@ std::unique_ptr<lcm::LCM> StartLcm(const std::string& url, const std::string& gi
 // The rig network's URL kept on the host (one network when it is local already).
 std::string LocalUrlOf(const std::string& url) { return TtlOf(url) == 0 ? url : WithTtl(url, 0); }
 
+// Buses of this process so far: each signs under a name of its own.
+std::atomic<int> buses_made{0};
+
+void WarnInsecure(const std::string& url) {
+  static std::once_flag warned;
+  std::call_once(warned, [&] {
+    std::cerr << "\n"
+                 "**********************************************************************\n"
+                 "  WARNING: message authentication is OFF (insecure).\n"
+                 "  Any host that reaches "
+              << url
+              << "\n"
+                 "  can send targets, commands and shapes that move the tendons.\n"
+                 "  Give the rig key instead: SHAPESENSE_KEY_FILES (docs/security.md).\n"
+                 "**********************************************************************\n\n";
+  });
+}
+
+// The bus's authentication: keys when given; none on a host-local network;
+// refused on a network that leaves the host, unless insecure (loudly).
+std::unique_ptr<BusAuth> MakeAuth(const AuthOptions& options, const std::string& url,
+                                  bool leaves_host, const std::string& host) {
+  const std::string sender =
+      options.sender.empty() ? DefaultSender(host, buses_made++) : options.sender;
+  if (!options.key_files.empty()) {
+    return std::make_unique<BusAuth>(ReadKeyRing(options.key_files), sender, options.first_contact,
+                                     "");
+  }
+  if (!leaves_host)
+    return std::make_unique<BusAuth>(std::nullopt, sender, FirstContactRule{}, "off (host-local)");
+  if (options.read_only)
+    return std::make_unique<BusAuth>(std::nullopt, sender, FirstContactRule{}, "off (read-only)");
+  if (!options.insecure) {
+    throw std::invalid_argument(
+        "the rig network " + url +
+        " leaves this host (ttl > 0) and no key is given: set SHAPESENSE_KEY_FILES to the "
+        "rig's key file (`shapesense keygen`, docs/security.md), or SHAPESENSE_INSECURE=1 to "
+        "run without authentication");
+  }
+  WarnInsecure(url);
+  return std::make_unique<BusAuth>(std::nullopt, sender, FirstContactRule{}, "OFF (insecure)");
+}
+
 }  // namespace
 
 LcmBusOptions LcmBusOptions::FromEnvironment(const std::string& url) {
@@ -61,6 +107,7 @@ LcmBusOptions LcmBusOptions::FromEnvironment(const std::string& url) {
   } catch (const std::invalid_argument& error) {
     throw std::invalid_argument(std::string("SHAPESENSE_CHANNEL_NETWORKS: ") + error.what());
   }
+  options.auth = AuthOptions::FromEnvironment();
   return options;
 }
 
@@ -76,6 +123,7 @@ LcmBus::LcmBus(const LcmBusOptions& options)
   rig_ = StartLcm(url_, options.url);
   if (local_url_ != url_) local_ = StartLcm(local_url_, options.local_url);
   leaves_host_ = TtlOf(url_) > 0;
+  auth_ = MakeAuth(options.auth, url_, leaves_host_, host_);
 }
 
 LcmBus::~LcmBus() = default;

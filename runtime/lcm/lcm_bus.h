@@ -10,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include "runtime/lcm/bus_auth.h"
 #include "runtime/lcm/channel_networks.h"
 #include "runtime/lcm/clock_offsets.h"
 #include "runtime/lcm/wire_check.h"
@@ -31,10 +32,15 @@ struct LcmBusOptions {
   std::string host;                  // empty: this host's name
   // Another host's clock further off than this is warned of in the status, ms.
   double clock_warning_ms = 1.0;
+  // Signing and verifying the channels that move the robot (bus_auth.h). A
+  // bus whose rig network leaves the host (ttl > 0) refuses to start
+  // without keys unless `auth.insecure`.
+  AuthOptions auth;
 
   // `url` with the rest from the environment: SHAPESENSE_LOCAL_LCM_URL,
   // SHAPESENSE_RIG_PREFIX, SHAPESENSE_CHANNEL_NETWORKS,
-  // SHAPESENSE_CLOCK_WARNING_MS (what a rig's unit
+  // SHAPESENSE_CLOCK_WARNING_MS, SHAPESENSE_KEY_FILES, SHAPESENSE_INSECURE
+  // (what a rig's unit
   // files set: `shapesense rig units`). Throws std::invalid_argument naming
   // the variable on a bad value.
   static LcmBusOptions FromEnvironment(const std::string& url = {});
@@ -46,7 +52,9 @@ struct LcmBusOptions {
 // instead of reaching the handler; handlers must never throw (an exception
 // escaping one is caught, counted, and dropped). Every message published
 // names this host (header.host); every message received from another host
-// feeds the estimate of that host's clock offset (clock_offsets()).
+// feeds the estimate of that host's clock offset (clock_offsets()). With
+// keys, messages on the signed channels (bus_auth.h) are signed as they are
+// published and reach a handler only when authentic and fresh.
 class LcmBus {
   // Every shapesense message has a header_t; tests also send bare types.
   template <class Message>
@@ -65,7 +73,7 @@ class LcmBus {
   LcmBus& operator=(const LcmBus&) = delete;
 
   // Publishes on the channel's network, naming this host when the message
-  // does not name one. Refuses (false, counted in Refused()) a message
+  // does not name one, signed when the channel is. Refuses (false, counted in Refused()) a message
   // larger than one datagram on a rig network that leaves the host (ttl >
   // 0), unless its channel is tolerant to loss.
   template <class Message>
@@ -96,14 +104,17 @@ class LcmBus {
   template <class Message>
   void Subscribe(const std::string& channel,
                  std::function<void(Message&&, const std::string&, int64_t)> handler) {
-    SubscribeRaw(channel, [this, handler = std::move(handler)](std::span<const uint8_t> bytes,
-                                                               const std::string& channel_of,
-                                                               int64_t receive_utime) {
+    const int subscription = static_cast<int>(subscriptions_.size());
+    SubscribeRaw(channel, [this, subscription, handler = std::move(handler)](
+                              std::span<const uint8_t> bytes, const std::string& channel_of,
+                              int64_t receive_utime) {
       Message message;
       // DecodeMessage checks the lengths before lcm-gen's decoder allocates by them.
       std::string why = DecodeMessage(bytes.data(), bytes.size(), &message);
       if (!why.empty()) return why;
       if constexpr (kHasHeader<Message>) {
+        why = Authenticate(subscription, channel_of, bytes, message, receive_utime);
+        if (!why.empty()) return why;
         ObserveClock(message.header.host, message.header.utime, receive_utime);
       }
       handler(std::move(message), channel_of, receive_utime);
@@ -131,6 +142,8 @@ class LcmBus {
   const LcmBusOptions& options() const { return options_; }
   const std::string& host() const { return host_; }
   const ClockOffsets& clock_offsets() const { return clock_offsets_; }
+  // Whether this bus signs and verifies, and what it rejected.
+  AuthCounts AuthSnapshot() const { return auth_->Counts(); }
 
   int64_t Rejected() const { return rejected_.load(); }
   int64_t HandlerErrors() const { return handler_errors_.load(); }
@@ -149,7 +162,24 @@ class LcmBus {
   bool PublishNamed(const std::string& channel, const Message& message) {
     lcm::LCM& target = PublishTarget(channel);
     if (&target == rig_.get() && leaves_host_ && !FitsRigNetwork(channel, message)) return false;
-    return target.publish(options_.prefix + channel, &message) == 0;
+    const std::string wire_channel = options_.prefix + channel;
+    if constexpr (kHasHeader<Message>) {
+      if (auth_->on() && IsSignedChannel(channel)) {
+        return auth_->SignAndSend(wire_channel, message, [&](std::span<const uint8_t> bytes) {
+          return target.publish(wire_channel, bytes.data(), static_cast<unsigned>(bytes.size())) ==
+                 0;
+        });
+      }
+    }
+    return target.publish(wire_channel, &message) == 0;
+  }
+  // "" when `message` may reach its handler; otherwise why not.
+  template <class Message>
+  std::string Authenticate(int subscription, const std::string& channel,
+                           std::span<const uint8_t> bytes, const Message& message,
+                           int64_t receive_utime) {
+    if (!IsSignedChannel(channel)) return {};
+    return auth_->Admit(subscription, options_.prefix + channel, bytes, message, receive_utime);
   }
   template <class Message>
   bool FitsRigNetwork(const std::string& channel, const Message& message) {
@@ -177,6 +207,7 @@ class LcmBus {
   bool leaves_host_ = false;         // the rig network's ttl > 0
   std::vector<std::unique_ptr<Raw>> subscriptions_;
   ClockOffsets clock_offsets_;
+  std::unique_ptr<BusAuth> auth_;
   std::atomic<int64_t> rejected_{0};
   std::atomic<int64_t> handler_errors_{0};
   std::atomic<int64_t> refused_{0};

@@ -78,6 +78,17 @@ void ServiceStatus::FillClocks(service_status_t* status,
   }
 }
 
+void ServiceStatus::FillAuth(service_status_t* status, const AuthCounts& counts) {
+  status->auth = counts.mode;
+  status->auth_accepted = counts.accepted;
+  status->num_auth_rejections = static_cast<int32_t>(counts.rejections.size());
+  for (const auto& [reason, count] : counts.rejections) {
+    status->auth_rejection_reasons.push_back(reason);
+    status->auth_rejections.push_back(count);
+  }
+  status->estops_accepted_unsigned = counts.estops_accepted_unsigned;
+}
+
 void ServiceStatus::Error(const std::string& what) {
   ++errors_;
   std::lock_guard lock(mutex_);
@@ -130,6 +141,7 @@ void ServiceStatus::Publish(LcmBus& bus, int64_t now_utime, int64_t also_rejecte
   status.host = bus.host();  // the name its messages carry
   FillClocks(&status, offsets);
   status.clock_warning = warning;
+  FillAuth(&status, bus.AuthSnapshot());
   bus.Publish(channels::Status(service_), status);
   last_cpu_utime_ = now_utime;
   last_cpu_seconds_ = ProcessCpuSeconds();

@@ -44,6 +44,7 @@ class ServiceStatus {
  private:
   void FillProcess(service_status_t* status, int64_t now_utime);
   static void FillClocks(service_status_t* status, const std::vector<HostClockOffset>& offsets);
+  static void FillAuth(service_status_t* status, const AuthCounts& counts);
   void ListenToPeers(LcmBus& bus);
 
   std::string service_;

@@ -19,6 +19,7 @@
 #include "shapesense/image_t.hpp"
 #include "shapesense/shape_t.hpp"
 #include "shapesense/voxel_cloud_t.hpp"
+#include "tests/runtime/lcm/temporary_key_file.h"
 #include "tests/support/network_test.h"
 
 namespace shapesense {
@@ -34,9 +35,16 @@ void HandleUntil(std::initializer_list<LcmBus*> buses, Done done, int rounds = 1
   }
 }
 
+// The rig network leaves the host: every bus holds the rig key.
+const test_keys::TemporaryKeyFile& RigKey() {
+  static const test_keys::TemporaryKeyFile key;
+  return key;
+}
+
 LcmBusOptions Options(const std::string& url, const std::string& local = {},
                       const std::string& prefix = {}, const std::string& host = {}) {
   LcmBusOptions options;
+  options.auth.key_files = {RigKey().path()};
   options.url = url;
   options.local_url = local.empty() ? url : local;
   options.prefix = prefix;
@@ -258,6 +266,24 @@ TEST_F(RigNetworkTest, ImageBusesHangOffTheLocalNetwork) {
   ImageBuses buses(main, 2);
   EXPECT_EQ(buses.ForCamera(1).url(), ImageUrl(kLocal, 1));
   EXPECT_EQ(TtlOf(buses.ForCamera(1).url()), 0);
+}
+
+TEST_F(RigNetworkTest, ABusOnANetworkThatLeavesTheHostNeedsTheKeyOrIsToldItIsInsecure) {
+  LcmBusOptions bare = Options(kRig, kLocal);
+  bare.auth.key_files.clear();
+  try {
+    LcmBus bus(bare);
+    FAIL() << "a bus on a ttl=1 network started without a key";
+  } catch (const std::invalid_argument& error) {
+    EXPECT_NE(std::string(error.what()).find("SHAPESENSE_KEY_FILES"), std::string::npos)
+        << error.what();
+  }
+  bare.auth.read_only = true;  // a status view acts on nothing
+  EXPECT_EQ(LcmBus(bare).AuthSnapshot().mode, "off (read-only)");
+  bare.auth.read_only = false;
+  bare.auth.insecure = true;
+  EXPECT_EQ(LcmBus(bare).AuthSnapshot().mode, "OFF (insecure)");
+  EXPECT_EQ(LcmBus(Options(kRig, kLocal)).AuthSnapshot().mode, "on (key 1)");
 }
 
 }  // namespace
