@@ -86,6 +86,29 @@ void CheckNetworks(const RigFile& rig, std::vector<std::string>* problems) {
   }
 }
 
+// Every host holds the rig key (or two during a rotation) unless the rig
+// runs insecure; the files themselves are on the hosts, checked there by
+// the programs that read them (0600, well formed).
+void CheckKeys(const RigFile& rig, const RigHost& host, std::vector<std::string>* problems) {
+  const std::string where = "hosts." + host.name + ".keys";
+  if (host.keys.empty() && !rig.insecure) {
+    problems->push_back(where +
+                        ": missing (the rig key file this host holds, `shapesense keygen`; "
+                        "or rig.insecure: true, docs/security.md)");
+  }
+  if (host.keys.size() > 2) {
+    problems->push_back(where + ": at most two (the key in use and the one rotated in)");
+  }
+  for (const std::string& key : host.keys) {
+    if (!std::filesystem::path(key).is_absolute()) {
+      problems->push_back(where + ": '" + key + "' is not an absolute path");
+    }
+    if (key.find(':') != std::string::npos) {
+      problems->push_back(where + ": '" + key + "' contains ':' (SHAPESENSE_KEY_FILES' separator)");
+    }
+  }
+}
+
 void CheckHosts(const RigFile& rig, std::vector<std::string>* problems) {
   std::set<std::string> names;
   for (const RigHost& host : rig.hosts) {
@@ -93,6 +116,7 @@ void CheckHosts(const RigFile& rig, std::vector<std::string>* problems) {
     if (host.interface.empty()) {
       problems->push_back("hosts." + host.name + ".interface: missing (the rig network's NIC)");
     }
+    CheckKeys(rig, host, problems);
     for (const RigProgram& program : host.programs) {
       const std::string where = "hosts." + host.name + ": " + program.program;
       if (!IsKnownProgram(program.program)) {

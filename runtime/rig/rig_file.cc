@@ -52,6 +52,7 @@ RigHost ParseHost(const Reader& reader, const std::string& name, const YAML::Nod
   RigHost host;
   host.name = name;
   host.interface = reader.Get<std::string>(node, "interface", path, "");
+  host.keys = reader.Get<std::vector<std::string>>(node, "keys", path, {});
   const YAML::Node programs = node["programs"];
   if (programs && !programs.IsSequence()) reader.Fail(path + "programs", "expected a list");
   for (size_t i = 0; programs && i < programs.size(); ++i) {
@@ -100,6 +101,7 @@ RigFile ParseRigFile(const std::string& text, const std::filesystem::path& sourc
   file.rig_network = reader.Get<std::string>(rig, "rig_network", "rig.", "");
   file.local_network = reader.Get<std::string>(rig, "local_network", "rig.", "");
   file.clock_offset_warning_ms = reader.Get<double>(rig, "clock_offset_warning_ms", "rig.", 1.0);
+  file.insecure = reader.Get<bool>(rig, "insecure", "rig.", false);
   file.cameras = reader.Get<std::vector<std::string>>(rig, "cameras", "rig.", {});
   file.channels = ParseChannels(reader, rig["channels"]);
   const YAML::Node hosts = root["hosts"];

@@ -23,6 +23,9 @@ struct RigProgram {
 struct RigHost {
   std::string name;       // its host name (gethostname): what its messages carry
   std::string interface;  // the rig network's interface, e.g. eth1
+  // The rig key files this host holds (docs/security.md): one, or two while
+  // a key is rotated in (the second, which signs). Absolute paths on the host.
+  std::vector<std::string> keys;
   std::vector<RigProgram> programs;
 };
 
@@ -33,6 +36,8 @@ struct RigFile {
   std::string rig_network;    // udpm://group:port?ttl=1
   std::string local_network;  // udpm://group:port?ttl=0
   double clock_offset_warning_ms = 1.0;
+  // Runs without message authentication (loudly; docs/security.md).
+  bool insecure = false;
   std::vector<std::string> cameras;
   std::vector<ChannelRoute> channels;  // overrides of the channel networks
   std::vector<RigHost> hosts;

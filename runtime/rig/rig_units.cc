@@ -43,7 +43,7 @@ UnitSpec SpecOf(const RigFile& rig, const RigHost& host, const RigProgram& progr
   spec.name = UnitName(rig, program);
   spec.description = "shapesense " + program.program + " of rig " + rig.name + " on " + host.name;
   spec.command = Command(rig, program, bin_dir);
-  spec.environment = RigEnvironment(rig);
+  spec.environment = RigEnvironment(rig, host);
   spec.cpu_affinity = program.cpus;
   spec.realtime_priority = program.realtime_priority;
   spec.notify = program.program != "lcm-logger" && program.program != "rig-status";
@@ -57,7 +57,8 @@ UnitSpec SpecOf(const RigFile& rig, const RigHost& host, const RigProgram& progr
 
 }  // namespace
 
-std::vector<std::pair<std::string, std::string>> RigEnvironment(const RigFile& rig) {
+std::vector<std::pair<std::string, std::string>> RigEnvironment(const RigFile& rig,
+                                                                const RigHost& host) {
   std::vector<std::pair<std::string, std::string>> environment = {
       {"LCM_DEFAULT_URL", rig.rig_network},
       {"SHAPESENSE_LOCAL_LCM_URL", rig.local_network},
@@ -69,6 +70,15 @@ std::vector<std::pair<std::string, std::string>> RigEnvironment(const RigFile& r
   if (!rig.channels.empty()) {
     environment.emplace_back("SHAPESENSE_CHANNEL_NETWORKS", ChannelNetworks::Format(rig.channels));
   }
+  if (!host.keys.empty()) {
+    std::string files;
+    for (const std::string& key : host.keys) {
+      if (!files.empty()) files += ':';
+      files += key;
+    }
+    environment.emplace_back("SHAPESENSE_KEY_FILES", files);
+  }
+  if (rig.insecure) environment.emplace_back("SHAPESENSE_INSECURE", "1");
   return environment;
 }
 

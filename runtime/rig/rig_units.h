@@ -22,9 +22,11 @@ struct UnitFile {
 std::vector<UnitFile> UnitsForHost(const RigFile& rig, const std::string& host,
                                    const std::filesystem::path& bin_dir);
 
-// The environment every program of the rig runs with (LCM_DEFAULT_URL,
+// The environment every program of `host` runs with (LCM_DEFAULT_URL,
 // SHAPESENSE_LOCAL_LCM_URL, SHAPESENSE_RIG_PREFIX, SHAPESENSE_CHANNEL_NETWORKS,
-// SHAPESENSE_CLOCK_WARNING_MS).
-std::vector<std::pair<std::string, std::string>> RigEnvironment(const RigFile& rig);
+// SHAPESENSE_CLOCK_WARNING_MS, and the host's SHAPESENSE_KEY_FILES or
+// SHAPESENSE_INSECURE).
+std::vector<std::pair<std::string, std::string>> RigEnvironment(const RigFile& rig,
+                                                                const RigHost& host);
 
 }  // namespace shapesense

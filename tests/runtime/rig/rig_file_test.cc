@@ -98,6 +98,39 @@ TEST(RigFileTest, EveryKindOfMistakeIsNamed) {
   EXPECT_TRUE(Mentions(CheckRig(mixed), "among the local network's ports"));
 }
 
+TEST(RigFileTest, EveryHostHoldsTheKeyUnlessTheRigRunsInsecure) {
+  RigFile rig = Example();
+  EXPECT_EQ(rig.hosts[1].keys, std::vector<std::string>{"/etc/shapesense/rig.key"});
+  rig.hosts[1].keys.clear();
+  rig.hosts[2].keys = {"rig.key"};
+  rig.hosts[0].keys = {"/etc/a.key", "/etc/b.key", "/etc/c.key"};
+  const std::vector<std::string> problems = CheckRig(rig);
+  EXPECT_TRUE(Mentions(problems, "hosts.control.keys: missing")) << Joined(problems);
+  EXPECT_TRUE(Mentions(problems, "hosts.operator.keys: 'rig.key' is not an absolute path"))
+      << Joined(problems);
+  EXPECT_TRUE(Mentions(problems, "hosts.camera.keys: at most two")) << Joined(problems);
+  rig = Example();
+  for (RigHost& host : rig.hosts) host.keys.clear();
+  rig.insecure = true;
+  EXPECT_TRUE(CheckRig(rig).empty()) << Joined(CheckRig(rig));
+}
+
+TEST(RigFileTest, AHostsProgramsGetItsKeysOrTheInsecureFlag) {
+  RigFile rig = Example();
+  rig.hosts[0].keys = {"/etc/shapesense/old.key", "/etc/shapesense/new.key"};
+  const auto environment = RigEnvironment(rig, rig.hosts[0]);
+  const auto keys = std::find_if(environment.begin(), environment.end(),
+                                 [](const auto& v) { return v.first == "SHAPESENSE_KEY_FILES"; });
+  ASSERT_NE(keys, environment.end());
+  EXPECT_EQ(keys->second, "/etc/shapesense/old.key:/etc/shapesense/new.key");
+  rig.hosts[0].keys.clear();
+  rig.insecure = true;
+  const auto insecure = RigEnvironment(rig, rig.hosts[0]);
+  EXPECT_NE(std::find(insecure.begin(), insecure.end(),
+                      std::pair<std::string, std::string>{"SHAPESENSE_INSECURE", "1"}),
+            insecure.end());
+}
+
 TEST(RigFileTest, TwoRigsOnOneGroupAreNamedAndApartTheyAreFine) {
   RigFile first = Example();
   RigFile second = Example();
