@@ -33,6 +33,8 @@ struct DemoCommandArgs {
   int hosts = 1;
   double camera_clock_offset_ms = 0.0;
   bool faults = false;
+  bool insecure = false;
+  bool attacker = false;
 };
 
 NetworkMode ParseNetwork(const std::string& network) {
@@ -183,6 +185,13 @@ void AddDemoCommand(CLI::App& app) {
   command->add_flag("--faults", args->faults,
                     "--hosts 3: in the last run, pull the control host's link for 2 s, kill "
                     "the shape service (restarted), restart the logger");
+  command->add_flag("--insecure", args->insecure,
+                    "run without message authentication (loudly): any process on the rig "
+                    "network could move the tendons (docs/security.md)");
+  command->add_flag("--attacker", args->attacker,
+                    "the closed-loop experiment with an attacker on the rig network: forged, "
+                    "bit-flipped and replayed targets, shapes and plant commands; report.json "
+                    "says how many were sent, rejected and accepted");
   command->add_flag("--pipeline", args->pipeline,
                     "the live sensing pipeline alone (no controller), scored, logged, replayed");
   command->add_flag("--no-replay", args->no_replay, "--pipeline: do not replay the log");
@@ -197,6 +206,13 @@ void AddDemoCommand(CLI::App& app) {
     if (args->hosts != 3 && (args->faults || args->camera_clock_offset_ms != 0.0)) {
       throw InputError("--faults and --camera-clock-offset-ms need --hosts 3");
     }
+    if (args->attacker && (args->pipeline || args->offline)) {
+      throw InputError(
+          "--attacker runs with the closed-loop experiment, not --pipeline or --offline");
+    }
+    args->live.auth.insecure = args->insecure;
+    args->experiment.auth.insecure = args->insecure;
+    args->experiment.attacker = args->attacker;
     if (args->offline) {
       RunOffline(*args);
     } else if (args->pipeline) {

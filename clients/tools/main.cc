@@ -3,6 +3,7 @@
 #include <CLI/CLI.hpp>
 #include <iostream>
 
+#include "clients/tools/attack/attack_command.h"
 #include "clients/tools/calibrate/calibrate_command.h"
 #include "clients/tools/config_command.h"
 #include "clients/tools/demo_command.h"
@@ -27,6 +28,7 @@ int main(int argc, char** argv) {
   shapesense::AddReplayCommand(app);
   shapesense::AddRigCommand(app);
   shapesense::AddKeygenCommand(app);
+  shapesense::AddAttackCommand(app);
   // The subcommands run inside the parse (their callbacks), so their errors
   // come out of it too.
   try {

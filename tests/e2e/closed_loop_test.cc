@@ -10,6 +10,14 @@
 // Closed loop must bring the true tip (the rig's truth, not the sensing)
 // within 1 mm of its targets at steady state where open loop does not, and
 // no command that went out may break a limit.
+//
+// Throughout, an attacker without the key (`shapesense attack`) sits on the
+// same multicast group and publishes forged targets, shapes and plant
+// commands, bit-flipped ones and replays of real ones (docs/security.md).
+// None may be acted on: the bounds above are those of a run without it,
+// every kind of forgery is rejected for its reason, and no forged target,
+// shape or plant command, nor a command computed from a forged shape,
+// reaches a handler.
 #include <gtest/gtest.h>
 #include <unistd.h>
 
@@ -66,6 +74,33 @@ void ExpectEveryRunClean(const ExperimentReport& report, const std::string& log)
   }
 }
 
+int64_t Count(const std::map<std::string, int64_t>& counts, const std::string& key) {
+  const auto found = counts.find(key);
+  return found == counts.end() ? 0 : found->second;
+}
+
+void ExpectEveryForgeryRejected(const ExperimentReport& report) {
+  EXPECT_TRUE(report.auth.starts_with("on (key")) << report.auth;
+  ASSERT_TRUE(report.attack.has_value());
+  const AttackReport& attack = *report.attack;
+  EXPECT_EQ(attack.error, "");
+  EXPECT_GT(attack.sent, 100);
+  for (const char* kind : {"unsigned_target", "foreign_key_shape", "forged_mac_plant_command",
+                           "replayed_shape", "flipped_shape", "replayed_old_plant_command"}) {
+    EXPECT_GT(attack.sent_by_kind.value(kind, 0), 0) << kind;
+  }
+  EXPECT_EQ(attack.accepted, 0) << nlohmann::json(attack.accepted_by_kind).dump();
+  for (const char* reason : {"unsigned", "unknown_key", "bad_mac"}) {
+    EXPECT_GT(Count(attack.rejected_by_reason, reason), 0) << reason;
+  }
+  EXPECT_GT(
+      Count(attack.rejected_by_reason, "replayed") + Count(attack.rejected_by_reason, "too_old"),
+      0);
+  // The programs that act on what moves the robot refused it themselves.
+  EXPECT_GT(Count(attack.rejected_by_program, "controller"), 0);
+  EXPECT_GT(Count(attack.rejected_by_program, "rig_sim"), 0);
+}
+
 TEST_F(ClosedLoopTest, ClosedLoopReachesTheTargetsWithinAMillimetreWhereOpenLoopDoesNot) {
   ExperimentArgs args = Args();
   if (e2e::UnderSanitizers()) {
@@ -85,12 +120,14 @@ TEST_F(ClosedLoopTest, ClosedLoopReachesTheTargetsWithinAMillimetreWhereOpenLoop
     args.targets.count = 12;  // the demo runs 20; 12 give a steady mean in less time
     args.targets.hold_s = 5.0;
   }
+  args.attacker = true;
   std::ostringstream log;
   const std::atomic<bool> stop{false};
   const ExperimentReport report = RunClosedLoopExperiment(args, stop, log);
   std::cout << log.str();
   ASSERT_EQ(report.runs.size(), 2u);
   ExpectEveryRunClean(report, log.str());
+  ExpectEveryForgeryRejected(report);
   const ExperimentRun& open = *report.Run("open_loop");
   const ExperimentRun& closed = *report.Run("closed_loop");
   std::cout << "open loop " << open.score.mean_tip_error_mm << " mm ("

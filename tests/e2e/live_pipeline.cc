@@ -16,6 +16,7 @@
 #include "runtime/file_io.h"
 #include "runtime/lcm/channels.h"
 #include "runtime/lcm/image_buses.h"
+#include "runtime/security/key_file.h"
 #include "services/carving/carving_service.h"
 #include "services/shape/shape_service.h"
 
@@ -162,6 +163,9 @@ LivePipeline::LivePipeline(const std::string& name, PipelineOptions options)
     recorder_ = std::make_unique<Recorder>();
     return;
   }
+  // The rig network crosses hosts: every program holds the rig key, as a
+  // rig's hosts do (docs/security.md).
+  WriteKeyFile(KeyFile(), NewAuthKey(1));
   // The recorder's sockets and threads belong to the camera host: made by
   // a thread that has entered it.
   std::thread([this] {
@@ -169,6 +173,7 @@ LivePipeline::LivePipeline(const std::string& name, PipelineOptions options)
     LcmBusOptions bus;
     bus.url = kRigUrl;
     bus.local_url = ReceiverUrl();
+    bus.auth.key_files = {KeyFile()};
     recorder_ = std::make_unique<Recorder>(bus);
   }).join();
 }
@@ -178,6 +183,7 @@ ChildOptions LivePipeline::On(const std::string& host) const {
   if (options_.hosts == nullptr) return options;
   options_.hosts->PlaceOn(host, &options);
   options.environment.emplace_back("SHAPESENSE_LOCAL_LCM_URL", ReceiverUrl());
+  options.environment.emplace_back("SHAPESENSE_KEY_FILES", KeyFile().string());
   return options;
 }
 

@@ -153,6 +153,8 @@ class LivePipeline {
   int64_t capture_end_utime() const { return capture_end_utime_; }
   std::filesystem::path CarvingConfig() const { return dir_ / "carving.yaml"; }
   std::filesystem::path ShapeConfig() const { return dir_ / "shape.yaml"; }
+  // The rig key of a run on two hosts.
+  std::filesystem::path KeyFile() const { return dir_ / "rig.key"; }
 
  private:
   std::filesystem::path WriteSmallerRig() const;

@@ -1,4 +1,5 @@
 #include "clients/tools/demo/closed_loop_experiment.h"
+#include "clients/tools/demo/demo_auth.h"
 
 #include <chrono>
 #include <cstdio>
@@ -451,10 +452,23 @@ struct ExperimentParts {
   ProcessGroup& processes;
   LcmBus& bus;
   ExperimentListener& listener;
+  const AttackWitness* witness;  // --attacker only
 };
 
 // The backgrounds, the pipeline, then one controller run per mode (the
 // faults during the last); false when stopped before the end.
+void PrintAttack(const AttackReport& attack, std::ostream& log) {
+  log << "attack: " << attack.sent << " forged or replayed messages sent, " << attack.rejected
+      << " rejected (";
+  const char* separator = "";
+  for (const auto& [reason, count] : attack.rejected_by_reason) {
+    log << separator << reason << " " << count;
+    separator = ", ";
+  }
+  log << "), " << attack.accepted << " accepted" << std::endl;
+  if (!attack.error.empty()) log << "attack: " << attack.error << std::endl;
+}
+
 bool RunPhases(const ExperimentArgs& args, const ExperimentParts& parts,
                const std::atomic<bool>& stop, ExperimentReport& report, std::ostream& log) {
   log << "backgrounds: the rig showing its backdrop alone" << std::endl;
@@ -467,6 +481,16 @@ bool RunPhases(const ExperimentArgs& args, const ExperimentParts& parts,
   RunDriver driver(args, parts.settings, parts.files.controller, parts.layout, parts.processes,
                    parts.bus, parts.listener, stop, log);
   FaultInjector faults = MakeFaultInjector(args, parts.plan, parts.processes);
+  const fs::path attack_report = parts.settings.out / "attack.json";
+  if (parts.witness != nullptr) {
+    fs::remove(attack_report);
+    ProgramSpec attacker = AttackerProgram(parts.settings, attack_report);
+    parts.layout.Place(&attacker);
+    std::erase_if(attacker.environment,
+                  [](const auto& v) { return v.first == "SHAPESENSE_KEY_FILES"; });
+    log << "the attacker joins the rig network" << std::endl;
+    if (!parts.processes.Start(attacker, kDemoStartTimeout)) return false;
+  }
   for (size_t i = 0; i < args.modes.size(); ++i) {
     const std::string& mode = args.modes[i];
     const bool last = i + 1 == args.modes.size();
@@ -487,6 +511,11 @@ bool RunPhases(const ExperimentArgs& args, const ExperimentParts& parts,
           driver.origin() + static_cast<int64_t>(report.targets.back().end_s * 1e6)};
       JudgeFaults(faults, evidence, *report.rig);
     }
+  }
+  if (parts.witness != nullptr) {
+    parts.processes.Stop("attacker");
+    report.attack = parts.witness->Judge(attack_report);
+    PrintAttack(*report.attack, log);
   }
   if (report.rig) {
     watch.End(*report.rig);
@@ -571,6 +600,8 @@ nlohmann::json ExperimentReportToJson(const ExperimentReport& report) {
                      {"trigger_to_shape_p50_ms", live.trigger_to_shape_ms.p50}};
   json["log"] = report.log.string();
   if (report.rig) AddRigToJson(*report.rig, json);
+  json["auth"] = report.auth;
+  if (report.attack) json["attack"] = AttackReportToJson(*report.attack);
   json["programs"] = ProgramsToJson(report.programs);
   json["failure"] = report.failure;
   json["interrupted"] = report.interrupted;
@@ -611,6 +642,7 @@ ExperimentReport RunExperimentHere(const ExperimentArgs& args, const std::atomic
   rig_options.seed = args.seed;
   const Rig rig = MakeSyntheticRig(rig_options);
   DemoSettings settings = MakeSettings(args, rig, files, RunSeconds(args));
+  settings.auth = PrepareDemoAuth(args.auth, settings.out / "setup", log);
   if (args.hosts != nullptr) {
     files.controller =
         ControllerConfigForHosts(files.controller, settings.out / "setup" / "config");
@@ -632,7 +664,7 @@ ExperimentReport RunExperimentHere(const ExperimentArgs& args, const std::atomic
   ThrowIfMissing(plan);
   WarnIfSocketBuffersAreSmall(log);
   PrepareOutput(plan, rig);
-  const HostLayout layout(args, settings.out / "setup", settings.camera_names);
+  const HostLayout layout(args, settings.out / "setup", settings.camera_names, settings.auth);
   if (layout.active()) {
     RotateLogs(plan);
     for (ProgramSpec& process : plan.background) layout.Place(&process);
@@ -641,6 +673,7 @@ ExperimentReport RunExperimentHere(const ExperimentArgs& args, const std::atomic
     report.rig = DescribeHosts(*args.hosts, plan, args.modes);
   }
   LcmBusOptions bus_options = LcmBusOptions::FromEnvironment(settings.lcm_url);
+  bus_options.auth = settings.auth;
   if (layout.active()) {
     bus_options.local_url = kDemoLcmUrl;
     bus_options.host = kOperatorHostName;
@@ -649,11 +682,15 @@ ExperimentReport RunExperimentHere(const ExperimentArgs& args, const std::atomic
   DemoScorer scorer;
   ExperimentListener listener(bus, scorer,
                               SafetyEnvelope(view.model, view.setup.controller.limits));
+  report.auth = bus.AuthSnapshot().mode;
+  std::optional<AttackWitness> witness;
+  if (args.attacker) witness.emplace(bus);
   ProcessGroup processes(
       plan.logs_dir, stop,
       {[&bus](int ms) { Pump(bus, ms); },
        [&listener](const std::string& service) { return listener.StatusSeen(service); }});
-  const ExperimentParts parts{plan, settings, files, layout, processes, bus, listener};
+  const ExperimentParts parts{plan,      settings, files,    layout,
+                              processes, bus,      listener, witness ? &*witness : nullptr};
   try {
     report.interrupted = !RunPhases(args, parts, stop, report, log);
     StopPipeline(processes, bus, scorer);

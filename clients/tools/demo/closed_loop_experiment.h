@@ -29,6 +29,7 @@
 #include <vector>
 
 #include "clients/tools/demo/demo_scorer.h"
+#include "clients/tools/demo/experiment_attack.h"
 #include "clients/tools/demo/experiment_faults.h"
 #include "clients/tools/demo/live_demo.h"
 #include "libs/control/limit_audit.h"
@@ -57,6 +58,11 @@ struct ExperimentArgs {
   const VirtualHosts* hosts = nullptr;
   // Made during the last run; three hosts only (experiment_faults.h).
   std::vector<ExperimentFault> faults;
+  // Message authentication: key files, or insecure; neither: a new key in
+  // out/setup/rig.key (demo_auth.h).
+  AuthOptions auth;
+  // Runs the attacker (experiment_attack.h) through every run.
+  bool attacker = false;
 };
 
 // How one fault went (experiment_faults.h).
@@ -117,6 +123,8 @@ struct ExperimentReport {
   std::vector<ProgramEnd> programs;
   std::filesystem::path log;
   std::optional<RigNetworkReport> rig;  // three hosts only
+  std::string auth;                     // the experimenter's bus: "on (key N)", ...
+  std::optional<AttackReport> attack;   // --attacker only
   std::string failure;
   bool interrupted = false;
 

@@ -22,6 +22,7 @@
 #include <thread>
 #include <vector>
 
+#include "runtime/lcm/bus_auth.h"
 #include "runtime/process/process_group.h"
 #include "runtime/process/virtual_hosts.h"
 #include "runtime/rig/rig_file.h"
@@ -44,7 +45,7 @@ std::vector<VirtualHostSpec> DemoHostSpecs(double camera_clock_offset_ms, int ca
 // The demo's rig file (config/rig.yaml's form) naming the hosts, their
 // programs and the networks: `local_network` for the images.
 std::string DemoRigFileText(const std::vector<std::string>& cameras,
-                            const std::string& local_network);
+                            const std::string& local_network, const AuthOptions& auth);
 
 // The host of a program of the demo's plan, by its name ("rig-sim-backdrop",
 // "capture-background", "controller-closed_loop", ...); throws

@@ -1,4 +1,5 @@
 #include "clients/tools/demo/demo_plan.h"
+#include "clients/tools/demo/demo_auth.h"
 
 #include <unistd.h>
 
@@ -169,14 +170,17 @@ std::string CameraSourceName(DemoCameras cameras) {
 
 ProgramSpec ControllerRun(const DemoSettings& settings, const fs::path& config,
                           const std::string& mode, const fs::path& log_dir) {
-  return {"controller-" + mode,
-          {Program(settings, "shapesense-controller"), "--config", config.string(), "--mode", mode,
-           "--targets", "stream", "--lcm-url", settings.lcm_url, "--log-csv",
-           (log_dir / "controller_log.csv").string(), "--log-lcm",
-           (log_dir / "controller_log.lcmlog").string(), "--duration", Backstop(settings)},
-          "",
-          "controller",
-          false};
+  ProgramSpec process{
+      "controller-" + mode,
+      {Program(settings, "shapesense-controller"), "--config", config.string(), "--mode", mode,
+       "--targets", "stream", "--lcm-url", settings.lcm_url, "--log-csv",
+       (log_dir / "controller_log.csv").string(), "--log-lcm",
+       (log_dir / "controller_log.lcmlog").string(), "--duration", Backstop(settings)},
+      "",
+      "controller",
+      false};
+  process.environment = AuthEnvironment(settings.auth);
+  return process;
 }
 
 DemoPlan MakeDemoPlan(const DemoSettings& settings) {
@@ -210,6 +214,9 @@ DemoPlan MakeDemoPlan(const DemoSettings& settings) {
   plan.pipeline.push_back(Service(settings, plan, "carving"));
   plan.pipeline.push_back(Service(settings, plan, "shape"));
   plan.pipeline.push_back(Capture(settings, plan));
+  for (std::vector<ProgramSpec>* phase : {&plan.background, &plan.pipeline}) {
+    for (ProgramSpec& process : *phase) process.environment = AuthEnvironment(settings.auth);
+  }
   return plan;
 }
 

@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include "runtime/lcm/bus_auth.h"
 #include "runtime/process/process_group.h"
 
 namespace shapesense {
@@ -44,6 +45,8 @@ struct DemoSettings {
   // The channels lcm-logger records (a regex; empty: all). Camera images at
   // 30 Hz are about 85 MB per second of run.
   std::string log_channels;
+  // How every program authenticates (demo_auth.h): the run's key.
+  AuthOptions auth;
 };
 
 // Everything but the camera images, the silhouettes and the voxels: what a

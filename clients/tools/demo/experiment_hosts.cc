@@ -83,11 +83,11 @@ nlohmann::json FaultToJson(const FaultOutcome& fault) {
 }  // namespace
 
 HostLayout::HostLayout(const ExperimentArgs& args, const fs::path& setup_dir,
-                       const std::vector<std::string>& cameras)
+                       const std::vector<std::string>& cameras, const AuthOptions& auth)
     : hosts_(args.hosts) {
   if (hosts_ == nullptr) return;
   rig_file_ = setup_dir / "rig_hosts.yaml";
-  const std::string text = DemoRigFileText(cameras, kDemoLcmUrl);
+  const std::string text = DemoRigFileText(cameras, kDemoLcmUrl, auth);
   WriteFileAtomically(rig_file_, text);
   rig_ = ParseRigFile(text, rig_file_);
   std::string problems;

@@ -29,9 +29,9 @@ namespace shapesense {
 class HostLayout {
  public:
   // Writes and checks the rig file in `setup_dir` (InputError naming each
-  // problem) when `args` has hosts.
+  // problem) when `args` has hosts; every host holds `auth`'s keys.
   HostLayout(const ExperimentArgs& args, const std::filesystem::path& setup_dir,
-             const std::vector<std::string>& cameras);
+             const std::vector<std::string>& cameras, const AuthOptions& auth);
 
   bool active() const { return hosts_ != nullptr; }
   const VirtualHosts& hosts() const { return *hosts_; }

@@ -1,4 +1,5 @@
 #include "clients/tools/demo/live_demo.h"
+#include "clients/tools/demo/demo_auth.h"
 
 #include <chrono>
 #include <fstream>
@@ -161,12 +162,15 @@ LiveDemoReport RunLiveDemo(const LiveDemoArgs& args, const std::atomic<bool>& st
   SyntheticRigOptions rig_options;
   rig_options.seed = args.seed;
   const Rig rig = MakeSyntheticRig(rig_options);
-  const DemoSettings settings = MakeSettings(args, rig);
+  DemoSettings settings = MakeSettings(args, rig);
+  settings.auth = PrepareDemoAuth(args.auth, settings.out / "setup", log);
   const DemoPlan plan = MakeDemoPlan(settings);
   ThrowIfMissing(plan);
   WarnIfSocketBuffersAreSmall(log);
   PrepareOutput(plan, rig);
-  LcmBus bus(settings.lcm_url);
+  LcmBusOptions bus_options = LcmBusOptions::FromEnvironment(settings.lcm_url);
+  bus_options.auth = settings.auth;
+  LcmBus bus(bus_options);
   DemoScorer scorer;
   Subscribe(bus, scorer);
   ProcessGroup processes(plan.logs_dir, stop,

@@ -36,6 +36,9 @@ struct LiveDemoArgs {
   std::filesystem::path lcm_logger;  // empty: lcm-logger on $PATH
   bool replay = true;                // replay the log and compare
   DemoProgress progress = DemoProgress::kLines;
+  // Message authentication: key files, or insecure; neither: a new key in
+  // out/setup/rig.key (demo_auth.h).
+  AuthOptions auth;
 };
 
 // Runs it; `stop` (Ctrl-C) ends the run early, cleanly: every program

@@ -81,7 +81,11 @@ void PrintReport(const LiveScorer::Report& r, std::ostream& out) {
 
 LiveScorer::Report RunMonitor(const MonitorArgs& args, const std::atomic<bool>& stop,
                               std::ostream& log) {
-  LcmBus bus(args.lcm_url);
+  LcmBusOptions options = LcmBusOptions::FromEnvironment(args.lcm_url);
+  // It watches and acts on nothing: a workstation needs no key to run it
+  // (with one, it verifies as any program).
+  options.auth.read_only = true;
+  LcmBus bus(options);
   LiveScorer scorer;
   Subscribe(bus, scorer);
   const auto end =

@@ -39,6 +39,8 @@ LcmBusOptions StatusBusOptions(const RigStatusArgs& args, const std::optional<Ri
     options.prefix = rig->prefix;
     options.routes = rig->channels;
   }
+  // It reads the status and acts on nothing: no key needed on a workstation.
+  options.auth.read_only = true;
   return options;
 }
 

@@ -16,12 +16,26 @@ namespace shapesense {
 namespace {
 
 TEST(DemoHostsTest, TheRigFileItWritesPassesTheChecks) {
+  AuthOptions auth;
+  auth.key_files = {"/tmp/demo/setup/rig.key"};
   const std::string text =
-      DemoRigFileText({"cam0", "cam1", "cam2"}, "udpm://239.255.76.67:7667?ttl=0");
+      DemoRigFileText({"cam0", "cam1", "cam2"}, "udpm://239.255.76.67:7667?ttl=0", auth);
   const RigFile rig = ParseRigFile(text, "rig_hosts.yaml");
   EXPECT_EQ(CheckRig(rig), std::vector<std::string>{});
   ASSERT_EQ(rig.hosts.size(), 3u);
   EXPECT_EQ(rig.rig_network, kDemoRigNetworkUrl);
+  EXPECT_FALSE(rig.insecure);
+  // Every host holds the run's key.
+  for (const RigHost& host : rig.hosts) {
+    EXPECT_EQ(host.keys, std::vector<std::string>{"/tmp/demo/setup/rig.key"}) << host.name;
+  }
+  // Insecure, it names no key and says so.
+  AuthOptions insecure;
+  insecure.insecure = true;
+  const RigFile open_rig = ParseRigFile(
+      DemoRigFileText({"cam0"}, "udpm://239.255.76.67:7667?ttl=0", insecure), "rig_hosts.yaml");
+  EXPECT_TRUE(open_rig.insecure);
+  EXPECT_TRUE(open_rig.hosts[0].keys.empty());
   // Every program it names is placed on the host the file names.
   for (const RigHost& host : rig.hosts) {
     for (const RigProgram& program : host.programs) {
@@ -35,6 +49,7 @@ TEST(DemoHostsTest, EveryProgramOfThePlanHasItsHost) {
   EXPECT_EQ(DemoHostOf("capture-background"), kCameraHostName);
   EXPECT_EQ(DemoHostOf("controller-closed_loop"), kControlHostName);
   EXPECT_EQ(DemoHostOf("lcm-logger"), kOperatorHostName);
+  EXPECT_EQ(DemoHostOf("attacker"), kOperatorHostName);
   EXPECT_THROW(DemoHostOf("unknown"), std::invalid_argument);
 }
 
