@@ -2,14 +2,21 @@
 
 #include <gtest/gtest.h>
 
+#include <unistd.h>
+
 #include <cmath>
+#include <random>
 
 #include "libs/control/safety_gate.h"
 #include "libs/core/error.h"
 #include "runtime/file_io.h"
+#include "shapesense/tendon_state_t.hpp"
 
 namespace shapesense::testing {
 namespace fs = std::filesystem;
+
+// The rig's marker to itself, on a channel nobody else uses.
+constexpr const char* kBarrierChannel = "TEST_IN_PROCESS_RIG_BARRIER";
 
 ManipulatorOptions CatheterModel() {
   return ParseManipulatorYaml(
@@ -81,10 +88,22 @@ static Eigen::VectorXd StartOf(const ControllerSetup& setup, const Eigen::Vector
   return SafetyEnvelope(TendonModel(setup.manipulator), setup.controller.limits).RestingCommand();
 }
 
+static LcmBusOptions Memq() {
+  LcmBusOptions options;
+  options.url = "memq://";
+  return options;
+}
+
 InProcessRig::InProcessRig(const ControllerSetup& setup, const FakeRigOptions& rig,
                            const Eigen::VectorXd& initial)
+    : InProcessRig(setup, rig, Memq(), initial) {}
+
+InProcessRig::InProcessRig(const ControllerSetup& setup, const FakeRigOptions& rig,
+                           const LcmBusOptions& bus_options, const Eigen::VectorXd& initial)
     : setup_(setup),
       period_us_(static_cast<int64_t>(std::llround(1e6 / setup.controller.loop_rate))),
+      bus_(bus_options),
+      barriers_(bus_options.url.rfind("udpm://", 0) == 0),
       plant_(
           bus_, setup.manipulator, rig, [this] { return now_; }, StartOf(setup, initial)),
       driver_(bus_, setup.actuators.tendons, setup.actuators.rig, [this] { return now_; }),
@@ -92,16 +111,34 @@ InProcessRig::InProcessRig(const ControllerSetup& setup, const FakeRigOptions& r
       client_(
           setup_, bus_, driver_, log_, [this] { return now_; }, &progress_) {}
 
+void InProcessRig::HandOver() {
+  if (!barriers_) return client_.DrainBus();
+  if (barrier_sent_ == 0) {
+    barrier_id_ = static_cast<int64_t>(std::random_device{}()) << 20 | getpid();
+    bus_.Subscribe<tendon_state_t>(kBarrierChannel,
+                                   [this](tendon_state_t&& marker, const std::string&, int64_t) {
+                                     if (marker.header.data_age_us == barrier_id_)
+                                       barrier_seen_ = marker.header.seq;
+                                   });
+  }
+  tendon_state_t marker{};
+  marker.header.data_age_us = barrier_id_;
+  marker.header.seq = ++barrier_sent_;
+  ASSERT_TRUE(bus_.Publish(kBarrierChannel, marker));
+  for (int i = 0; i < 500 && barrier_seen_ < barrier_sent_; ++i) client_.HandleBus(10);
+  ASSERT_EQ(barrier_seen_, barrier_sent_) << "the barrier did not come back within 5 s";
+}
+
 void InProcessRig::Start() {
   plant_.Tick();
-  client_.Start();
+  client_.Start();  // the driver's Connect waits for the plant's state itself
   start_utime_ = now_;
 }
 
 void InProcessRig::Step() {
   now_ += period_us_;
   plant_.Tick();
-  client_.DrainBus();
+  HandOver();
   client_.Step();
 }
 

@@ -3,7 +3,11 @@
 // The controller service against the fake plant peer, in one process over
 // LCM memq://, on a simulated clock: each step advances the clock by the
 // control period, lets the plant publish, hands every waiting message to
-// its subscriber, and runs one control step. Deterministic.
+// its subscriber, and runs one control step. Deterministic. Over UDP
+// multicast instead (a bus of one's own, e.g. with keys), each step hands
+// over what it published up to a barrier: a marker the rig sends itself
+// after the rest, which arrives after them (one socket keeps its order), so
+// it stays deterministic whatever else the network carries.
 
 #include <filesystem>
 #include <functional>
@@ -44,6 +48,9 @@ class InProcessRig {
   // command, straight with every tendon at the minimum tension).
   InProcessRig(const ControllerSetup& setup, const FakeRigOptions& rig,
                const Eigen::VectorXd& initial = {});
+  // The same on a bus of `bus_options`.
+  InProcessRig(const ControllerSetup& setup, const FakeRigOptions& rig,
+               const LcmBusOptions& bus_options, const Eigen::VectorXd& initial = {});
 
   // The plant publishes its state; the controller connects and starts.
   void Start();
@@ -66,11 +73,18 @@ class InProcessRig {
   std::string progress() const { return progress_.str(); }
 
  private:
+  // Hands over everything published so far (UDP) or waiting (memq).
+  void HandOver();
+
   ControllerSetup setup_;
   int64_t now_ = 1'700'000'000'000'000;  // µs since the epoch
   int64_t start_utime_ = now_;
   int64_t period_us_;
-  LcmBus bus_{"memq://"};
+  LcmBus bus_;
+  bool barriers_ = false;   // over UDP: hand over up to a barrier each step
+  int64_t barrier_id_ = 0;  // this rig's markers (a log played back carries another's)
+  int64_t barrier_sent_ = 0;
+  int64_t barrier_seen_ = 0;
   FakeRigPlant plant_;
   RigPlantDriver driver_;
   ControllerLog log_;
