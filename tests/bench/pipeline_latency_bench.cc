@@ -32,6 +32,7 @@
 #include "runtime/lcm/pipeline_stages.h"
 #include "runtime/process/child_process.h"
 #include "runtime/process/private_network.h"
+#include "runtime/security/key_file.h"
 #include "tests/bench/latency_bench_rig.h"
 #include "tests/bench/latency_stats.h"
 #include "tests/bench/pipeline_listener.h"
@@ -66,6 +67,10 @@ struct BenchOptions {
   int nice = 0;              // of the bench and the services (< 0 needs privileges)
   bool tune_malloc = false;  // the services keep freed memory (see ServiceEnvironment)
   bool details = false;      // the breakdown of every step, not only the first and the failing one
+  // Message authentication (docs/security.md): "off", "on" (the services
+  // and the listener hold a key: the shapes are signed and verified), or
+  // "compare": the first step without, then with, and what it adds.
+  std::string auth = "off";
 };
 
 double Seconds(Clock::duration d) { return std::chrono::duration<double>(d).count(); }
@@ -505,6 +510,87 @@ std::string PrintSetup(const BenchOptions& options, const std::string& network_e
   return receive_url;
 }
 
+// Gives the services started from now on, and the listener made after, the
+// rig key in `folder` (SHAPESENSE_KEY_FILES), or none.
+void UseKey(bool on, const fs::path& folder) {
+  if (!on) {
+    unsetenv("SHAPESENSE_KEY_FILES");
+    return;
+  }
+  const fs::path key = folder / "rig.key";
+  if (!fs::exists(key)) WriteKeyFile(key, NewAuthKey(1));
+  setenv("SHAPESENSE_KEY_FILES", key.c_str(), 1);
+}
+
+// The services and the listener, up and reporting; the first step measured
+// (after a warm-up), then, unless only the first is wanted, the ramp.
+struct Session {
+  StepResult first;
+  double sustained = 0.0;
+  bool ok = false;
+};
+
+Session Measure(const BenchOptions& options, BenchRig& rig, double in_process_ms,
+                const fs::path& folder, const std::string& receive_url, bool ramp) {
+  Session session;
+  PipelineListener listener(receive_url);
+  Services services = StartServices(options, folder, receive_url);
+  std::printf(
+      "Waiting for shapesense-carving (builds its carving table) and shapesense-shape...\n");
+  std::fflush(stdout);
+  if (!WaitForStatuses(listener, 0, milliseconds(120000))) {
+    std::printf("The services did not report within 120 s (see their messages above)\n");
+    return session;
+  }
+  FrameSetPlayer player(rig, kLcmUrl);
+  int64_t next_seq = 0;
+  // warm-up, not counted
+  RunStep(player, listener, in_process_ms, options.rates.front(), 1.0, &next_seq);
+  session.first = RunStep(player, listener, in_process_ms, options.rates.front(),
+                          options.first_seconds, &next_seq);
+  PrintDetailedStep(session.first, options.target_p99_ms);
+  if (ramp) {
+    std::printf("\nStepping the rate up (%.1f s a step; d/e: the service's drops / errors):",
+                options.step_seconds);
+    session.sustained = Ramp(options, player, listener, session.first, &next_seq);
+  }
+  std::printf("\nStopping the services:\n");
+  std::fflush(stdout);
+  StopServices(services);
+  session.ok = true;
+  return session;
+}
+
+// The first step without and with authentication, in the order off, on,
+// on, off, so that a drift of the machine falls on both alike; the samples
+// of each pooled. The shape service signs each shape before it leaves (in
+// the last segment, "shape -> bench socket"); the bench verifies it after.
+int CompareAuth(const BenchOptions& options, BenchRig& rig, double in_process_ms,
+                const fs::path& folder, const std::string& receive_url) {
+  std::map<bool, std::vector<double>> totals, last_segment;
+  for (const bool on : {false, true, true, false}) {
+    std::printf("\n== authentication %s ==\n", on ? "on (the shapes signed and verified)" : "off");
+    UseKey(on, folder);
+    const Session session = Measure(options, rig, in_process_ms, folder, receive_url, false);
+    if (!session.ok) return 1;
+    const LatencyBreakdown breakdown = BreakDown(session.first.shapes);
+    totals[on].insert(totals[on].end(), breakdown.total.begin(), breakdown.total.end());
+    last_segment[on].insert(last_segment[on].end(), breakdown.segments.back().begin(),
+                            breakdown.segments.back().end());
+  }
+  std::printf("\nAuthentication at %.0f Hz (%s), two sessions each, pooled:\n",
+              options.rates.front(), MachineLoad().c_str());
+  for (const auto& [name, samples] : {std::pair{"trigger -> shape", &totals},
+                                      std::pair{"shape -> bench socket", &last_segment}}) {
+    const Percentiles off = Summarize((*samples)[false]);
+    const Percentiles on = Summarize((*samples)[true]);
+    std::printf("  %-22s off p50 %.3f p99 %.3f ms; on p50 %.3f p99 %.3f ms; added p50 %+.3f p99 "
+                "%+.3f ms\n",
+                name, off.p50, off.p99, on.p50, on.p99, on.p50 - off.p50, on.p99 - off.p99);
+  }
+  return 0;
+}
+
 int Run(const BenchOptions& options, const std::string& network_error) {
   if (options.rates.empty()) throw std::invalid_argument("--rates: expected at least one rate");
   const std::string receive_url = PrintSetup(options, network_error);
@@ -512,29 +598,13 @@ int Run(const BenchOptions& options, const std::string& network_error) {
   const double in_process_ms = InProcessCpuMs(rig, options);
   const TempFolder folder;
   WriteBenchRig(rig, folder.path());
-  PipelineListener listener(receive_url);
-  Services services = StartServices(options, folder.path(), receive_url);
-  std::printf(
-      "Waiting for shapesense-carving (builds its carving table) and shapesense-shape...\n");
-  std::fflush(stdout);
-  if (!WaitForStatuses(listener, 0, milliseconds(120000))) {
-    std::printf("The services did not report within 120 s (see their messages above)\n");
-    return 1;
+  if (options.auth == "compare") {
+    return CompareAuth(options, rig, in_process_ms, folder.path(), receive_url);
   }
-  FrameSetPlayer player(rig, kLcmUrl);
-  int64_t next_seq = 0;
-  // warm-up, not counted
-  RunStep(player, listener, in_process_ms, options.rates.front(), 1.0, &next_seq);
-  const StepResult first = RunStep(player, listener, in_process_ms, options.rates.front(),
-                                   options.first_seconds, &next_seq);
-  PrintDetailedStep(first, options.target_p99_ms);
-  std::printf("\nStepping the rate up (%.1f s a step; d/e: the service's drops / errors):",
-              options.step_seconds);
-  const double sustained = Ramp(options, player, listener, first, &next_seq);
-  std::printf("\nStopping the services:\n");
-  std::fflush(stdout);
-  StopServices(services);
-  PrintSummary(options, first, sustained);
+  UseKey(options.auth == "on", folder.path());
+  const Session session = Measure(options, rig, in_process_ms, folder.path(), receive_url, true);
+  if (!session.ok) return 1;
+  PrintSummary(options, session.first, session.sustained);
   return 0;
 }
 
@@ -569,6 +639,9 @@ int ParseOptions(int argc, char** argv, BenchOptions* options) {
   app.add_option("--nice", options->nice,
                  "nice value of the bench and the services (negative: needs privileges)")
       ->check(CLI::Range(-20, 19));
+  app.add_option("--auth", options->auth,
+                 "message authentication: off, on, or compare (the first step without, then with)")
+      ->check(CLI::IsMember({"off", "on", "compare"}));
   app.add_flag("--tune-malloc", options->tune_malloc,
                "run the services with glibc's malloc keeping freed memory (GLIBC_TUNABLES)");
   app.add_flag(
