@@ -40,9 +40,8 @@ struct LcmBusOptions {
   // `url` with the rest from the environment: SHAPESENSE_LOCAL_LCM_URL,
   // SHAPESENSE_RIG_PREFIX, SHAPESENSE_CHANNEL_NETWORKS,
   // SHAPESENSE_CLOCK_WARNING_MS, SHAPESENSE_KEY_FILES, SHAPESENSE_INSECURE
-  // (what a rig's unit
-  // files set: `shapesense rig units`). Throws std::invalid_argument naming
-  // the variable on a bad value.
+  // (what a rig's unit files set: `shapesense rig units`). Throws
+  // std::invalid_argument naming the variable on a bad value.
   static LcmBusOptions FromEnvironment(const std::string& url = {});
 };
 
@@ -73,9 +72,9 @@ class LcmBus {
   LcmBus& operator=(const LcmBus&) = delete;
 
   // Publishes on the channel's network, naming this host when the message
-  // does not name one, signed when the channel is. Refuses (false, counted in Refused()) a message
-  // larger than one datagram on a rig network that leaves the host (ttl >
-  // 0), unless its channel is tolerant to loss.
+  // does not name one, signed when the channel is. Refuses (false, counted
+  // in Refused()) a message larger than one datagram on a rig network that
+  // leaves the host (ttl > 0), unless its channel is tolerant to loss.
   template <class Message>
   bool Publish(const std::string& channel, Message& message) {
     if constexpr (kHasHeader<Message>) {
@@ -161,13 +160,16 @@ class LcmBus {
   template <class Message>
   bool PublishNamed(const std::string& channel, const Message& message) {
     lcm::LCM& target = PublishTarget(channel);
-    if (&target == rig_.get() && leaves_host_ && !FitsRigNetwork(channel, message)) return false;
+    const bool checked = &target == rig_.get() && leaves_host_;
+    if (checked && !FitsRigNetwork(channel, message.getEncodedSize())) return false;
     const std::string wire_channel = options_.prefix + channel;
     if constexpr (kHasHeader<Message>) {
       if (auth_->on() && IsSignedChannel(channel)) {
         return auth_->SignAndSend(wire_channel, message, [&](std::span<const uint8_t> bytes) {
-          return target.publish(wire_channel, bytes.data(), static_cast<unsigned>(bytes.size())) ==
-                 0;
+          // Signed, it names its sender: a few bytes more.
+          const int size = static_cast<int>(bytes.size());
+          if (checked && !FitsRigNetwork(channel, size)) return false;
+          return target.publish(wire_channel, bytes.data(), static_cast<unsigned>(size)) == 0;
         });
       }
     }
@@ -181,12 +183,9 @@ class LcmBus {
     if (!IsSignedChannel(channel)) return {};
     return auth_->Admit(subscription, options_.prefix + channel, bytes, message, receive_utime);
   }
-  template <class Message>
-  bool FitsRigNetwork(const std::string& channel, const Message& message) {
-    if (IsLossTolerant(channel) || message.getEncodedSize() <= MaxRigMessageBytes(channel)) {
-      return true;
-    }
-    Refuse(channel, message.getEncodedSize());
+  bool FitsRigNetwork(const std::string& channel, int encoded_bytes) {
+    if (IsLossTolerant(channel) || encoded_bytes <= MaxRigMessageBytes(channel)) return true;
+    Refuse(channel, encoded_bytes);
     return false;
   }
 

@@ -3,7 +3,10 @@
 // runs it: the rig-sim, capture, carving and shape on the camera host, the
 // controller on the control host, the logger, `rig status` and the
 // experimenter on the operator host. Only compact messages cross the rig
-// network (ttl=1); the images stay on the camera host.
+// network (ttl=1); the images stay on the camera host. The rig network
+// crosses hosts, so every program holds the run's key and signs and
+// verifies the targets, commands and shapes (docs/security.md): the clock
+// offsets below must not break that.
 //
 //   - The camera host's clock +0.5 s, then -0.5 s off: the controller closes
 //     the loop as well as with synchronised clocks, each host measures the
@@ -111,6 +114,7 @@ void ExpectACleanRigRun(const ExperimentReport& report, double camera_offset_ms)
   ASSERT_TRUE(report.rig.has_value());
   const RigNetworkReport& rig = *report.rig;
   ASSERT_EQ(report.runs.size(), 1u);
+  EXPECT_TRUE(report.auth.starts_with("on (key")) << report.auth;
   const ExperimentRun& run = report.runs[0];
   EXPECT_EQ(run.violations.total(), 0) << run.first_violation;
   EXPECT_GT(run.commands, 100);
