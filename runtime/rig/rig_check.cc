@@ -100,11 +100,13 @@ void CheckKeys(const RigFile& rig, const RigHost& host, std::vector<std::string>
     problems->push_back(where + ": at most two (the key in use and the one rotated in)");
   }
   for (const std::string& key : host.keys) {
+    std::string named = where;
+    named.append(": '").append(key).append("'");
     if (!std::filesystem::path(key).is_absolute()) {
-      problems->push_back(where + ": '" + key + "' is not an absolute path");
+      problems->push_back(named + " is not an absolute path");
     }
     if (key.find(':') != std::string::npos) {
-      problems->push_back(where + ": '" + key + "' contains ':' (SHAPESENSE_KEY_FILES' separator)");
+      problems->push_back(named + " contains ':' (SHAPESENSE_KEY_FILES' separator)");
     }
   }
 }

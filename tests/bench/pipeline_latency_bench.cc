@@ -584,9 +584,10 @@ int CompareAuth(const BenchOptions& options, BenchRig& rig, double in_process_ms
                                       std::pair{"shape -> bench socket", &last_segment}}) {
     const Percentiles off = Summarize((*samples)[false]);
     const Percentiles on = Summarize((*samples)[true]);
-    std::printf("  %-22s off p50 %.3f p99 %.3f ms; on p50 %.3f p99 %.3f ms; added p50 %+.3f p99 "
-                "%+.3f ms\n",
-                name, off.p50, off.p99, on.p50, on.p99, on.p50 - off.p50, on.p99 - off.p99);
+    std::printf(
+        "  %-22s off p50 %.3f p99 %.3f ms; on p50 %.3f p99 %.3f ms; added p50 %+.3f p99 "
+        "%+.3f ms\n",
+        name, off.p50, off.p99, on.p50, on.p99, on.p50 - off.p50, on.p99 - off.p99);
   }
   return 0;
 }

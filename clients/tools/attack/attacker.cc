@@ -1,6 +1,6 @@
 #include "clients/tools/attack/attacker.h"
 
-#include <chrono>
+#include <algorithm>
 #include <stdexcept>
 
 #include "libs/security/auth_key.h"
@@ -106,11 +106,12 @@ std::vector<uint8_t> Attacker::Recorded(const std::string& channel, int64_t age_
                                         int64_t now) const {
   const auto found = heard_.find(channel);
   if (found == heard_.end() || found->second.empty()) return {};
-  if (age_us == 0) return found->second.back().bytes;
-  for (auto it = found->second.rbegin(); it != found->second.rend(); ++it) {
-    if (now - it->receive_utime >= age_us) return it->bytes;
-  }
-  return found->second.front().bytes;
+  const std::deque<Heard>& kept = found->second;
+  // The newest at least `age_us` old (the oldest kept when none is).
+  const auto old_enough = std::find_if(kept.rbegin(), kept.rend(), [&](const Heard& heard) {
+    return now - heard.receive_utime >= age_us;
+  });
+  return old_enough != kept.rend() ? old_enough->bytes : kept.front().bytes;
 }
 
 // One message per round, the kinds in turn.

@@ -71,9 +71,9 @@ void PlaceOnDemoHost(const VirtualHosts& hosts, const RigFile& rig, ProgramSpec*
     throw std::invalid_argument("demo --hosts: the rig file has no host '" + host + "'");
   }
   // The rig file's environment replaces what the plan set (the same keys).
-  for (auto& [name, value] : RigEnvironment(rig, *rig_host)) {
-    std::erase_if(spec->environment, [&](const auto& set) { return set.first == name; });
-    spec->environment.emplace_back(name, value);
+  for (auto& variable : RigEnvironment(rig, *rig_host)) {
+    std::erase_if(spec->environment, [&](const auto& set) { return set.first == variable.first; });
+    spec->environment.push_back(std::move(variable));
   }
   hosts.PlaceOn(host, spec);
 }

@@ -91,7 +91,7 @@ LiveScorer::Report RunMonitor(const MonitorArgs& args, const std::atomic<bool>& 
   const auto end =
       std::chrono::steady_clock::now() + std::chrono::duration<double>(args.duration_s);
   while (!stop && std::chrono::steady_clock::now() < end) bus.Handle(50);
-  const LiveScorer::Report report = scorer.Finish(NowUtime());
+  LiveScorer::Report report = scorer.Finish(NowUtime());
   PrintReport(report, log);
   if (!args.report.empty()) WriteFileAtomically(args.report, ReportToJson(report).dump(2) + "\n");
   return report;
