@@ -174,9 +174,15 @@ TEST_F(ThreeHostClosedLoopTest, TheCameraClockHalfASecondOffChangesNothing) {
     // a controller that took stale shapes or held would be millimetres off.
     EXPECT_NEAR(run.score.mean_tip_error_mm, reference, 0.5);
     // The sensing as fresh as with synchronised clocks: a controller that
-    // compared the camera's clock with its own would see it 0.5 s off.
-    EXPECT_NEAR(MedianSensingAge(*report), reference_age, 0.02);
-    EXPECT_GT(run.shapes, 0.8 * report->rate_hz * RunSeconds(*report));
+    // compared the camera's clock with its own would see it 0.5 s off. (On
+    // an idle machine the three runs' medians agree within 2 ms, 46-47 ms;
+    // a busy one, CI's sanitizer build beside the test, moves them between
+    // runs by tens of ms, so the bound is a fifth of the offset it catches.)
+    EXPECT_NEAR(MedianSensingAge(*report), reference_age, 0.1);
+    // The shapes kept coming (85-95% of the frame-sets, as busy as the
+    // machine is): a controller whose checks refused the other host's
+    // shapes would have none.
+    EXPECT_GT(run.shapes, 0.5 * report->rate_hz * RunSeconds(*report));
     EXPECT_EQ(report->rig->releases, 0) << "the controller never stopped";
   }
 }
