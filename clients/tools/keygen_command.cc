@@ -1,6 +1,5 @@
 #include "clients/tools/keygen_command.h"
 
-#include <chrono>
 #include <iostream>
 #include <memory>
 
@@ -9,11 +8,7 @@
 namespace shapesense {
 
 uint32_t RunKeygen(const std::filesystem::path& out, uint32_t id, std::ostream& log) {
-  if (id == 0) {
-    id = static_cast<uint32_t>(std::chrono::duration_cast<std::chrono::seconds>(
-                                   std::chrono::system_clock::now().time_since_epoch())
-                                   .count());
-  }
+  if (id == 0) id = KeyIdFromClock();
   WriteKeyFile(out, NewAuthKey(id));
   log << "wrote key " << id << " to " << out.string()
       << " (mode 0600); copy it to the rig's hosts over a secure channel (docs/security.md)\n";

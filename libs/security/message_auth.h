@@ -101,7 +101,6 @@ class MessageSigner {
     next_ = std::max(next_, floor);
     return {keys_.signing().id, sender_, next_++};
   }
-  const std::string& sender() const { return sender_; }
   const KeyRing& keys() const { return keys_; }
   // The MAC of a message carrying `tag` (key looked up by the tag's id).
   Mac Sign(std::string_view channel, const AuthTag& tag, std::span<const uint8_t> encoded,

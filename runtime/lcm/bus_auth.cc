@@ -1,7 +1,6 @@
 #include "runtime/lcm/bus_auth.h"
 
-#include <cerrno>
-#include <cstdlib>
+#include <cerrno>  // program_invocation_short_name
 #include <sstream>
 #include <stdexcept>
 
@@ -10,20 +9,6 @@
 
 namespace shapesense {
 namespace {
-
-std::string Environment(const char* name) {
-  const char* value = std::getenv(name);
-  return value != nullptr ? value : "";
-}
-
-std::vector<std::filesystem::path> SplitPaths(const std::string& list) {
-  std::vector<std::filesystem::path> paths;
-  std::stringstream stream(list);
-  for (std::string path; std::getline(stream, path, ':');) {
-    if (!path.empty()) paths.emplace_back(path);
-  }
-  return paths;
-}
 
 // An attacker names itself: keep what reaches a log short and printable.
 std::string Printable(const std::string& text) {
@@ -56,16 +41,22 @@ AuthTag TagOf(const auth_t& auth) {
   return {static_cast<uint32_t>(auth.key_id), auth.sender, static_cast<uint64_t>(auth.counter)};
 }
 
-AuthOptions AuthOptions::FromEnvironment() {
-  AuthOptions options;
-  options.key_files = SplitPaths(Environment("SHAPESENSE_KEY_FILES"));
-  const std::string insecure = Environment("SHAPESENSE_INSECURE");
-  if (!insecure.empty() && insecure != "0" && insecure != "1") {
-    throw std::invalid_argument("SHAPESENSE_INSECURE='" + insecure + "': expected 0 or 1");
+std::string FormatKeyFiles(const std::vector<std::filesystem::path>& files) {
+  std::string value;
+  for (const std::filesystem::path& file : files) {
+    if (!value.empty()) value += ':';
+    value += file.string();
   }
-  options.insecure = insecure == "1";
-  options.sender = Environment("SHAPESENSE_AUTH_SENDER");
-  return options;
+  return value;
+}
+
+std::vector<std::filesystem::path> ParseKeyFiles(const std::string& value) {
+  std::vector<std::filesystem::path> files;
+  std::stringstream stream(value);
+  for (std::string file; std::getline(stream, file, ':');) {
+    if (!file.empty()) files.emplace_back(file);
+  }
+  return files;
 }
 
 BusAuth::BusAuth(std::optional<KeyRing> keys, std::string sender, FirstContactRule first_contact,

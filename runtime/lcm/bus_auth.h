@@ -17,6 +17,7 @@
 #include <vector>
 
 #include "libs/security/message_auth.h"
+#include "runtime/lcm/wire_check.h"
 #include "shapesense/estop_t.hpp"
 #include "shapesense/header_t.hpp"
 
@@ -59,8 +60,7 @@ std::vector<uint8_t> EncodeSigned(Message message, MessageSigner& signer,
   auth.sender = tag.sender;
   auth.counter = static_cast<int64_t>(tag.counter);
   std::fill(std::begin(auth.mac), std::end(auth.mac), 0);
-  std::vector<uint8_t> bytes(static_cast<size_t>(message.getEncodedSize()));
-  message.encode(bytes.data(), 0, static_cast<int>(bytes.size()));
+  std::vector<uint8_t> bytes = EncodeMessage(message);
   const size_t mac_offset = MacOffset(message);
   const Mac mac = signer.Sign(wire_channel, tag, bytes, mac_offset);
   std::copy(mac.begin(), mac.end(), bytes.begin() + static_cast<std::ptrdiff_t>(mac_offset));
@@ -92,9 +92,14 @@ struct AuthOptions {
   // receiver's start is the bus's).
   FirstContactRule first_contact;
 
-  // Throws std::invalid_argument naming the variable on a bad value.
+  // Throws std::invalid_argument naming the variable on a bad value
+  // (read with the rest of LcmBusOptions::FromEnvironment).
   static AuthOptions FromEnvironment();
 };
+
+// SHAPESENSE_KEY_FILES' value: the files joined by ':', and back.
+std::string FormatKeyFiles(const std::vector<std::filesystem::path>& files);
+std::vector<std::filesystem::path> ParseKeyFiles(const std::string& value);
 
 // The signing and verifying state of one bus, safe from any thread.
 class BusAuth {

@@ -89,6 +89,18 @@ std::unique_ptr<BusAuth> MakeAuth(const AuthOptions& options, const std::string&
 
 }  // namespace
 
+AuthOptions AuthOptions::FromEnvironment() {
+  AuthOptions options;
+  options.key_files = ParseKeyFiles(Environment("SHAPESENSE_KEY_FILES"));
+  const std::string insecure = Environment("SHAPESENSE_INSECURE");
+  if (!insecure.empty() && insecure != "0" && insecure != "1") {
+    throw std::invalid_argument("SHAPESENSE_INSECURE='" + insecure + "': expected 0 or 1");
+  }
+  options.insecure = insecure == "1";
+  options.sender = Environment("SHAPESENSE_AUTH_SENDER");
+  return options;
+}
+
 LcmBusOptions LcmBusOptions::FromEnvironment(const std::string& url) {
   LcmBusOptions options;
   options.url = url;

@@ -14,6 +14,7 @@
 #include <exception>
 #include <span>
 #include <string>
+#include <vector>
 
 #include "shapesense/image_t.hpp"
 #include "shapesense/shape_t.hpp"
@@ -60,6 +61,14 @@ struct WireCheck<tendon_state_t> {
 
 // The type fingerprint at the start of an encoded buffer (0 when shorter than 8 bytes).
 int64_t WireFingerprint(const uint8_t* data, size_t size);
+
+// `message` as it travels (the inverse of DecodeMessage).
+template <class Message>
+std::vector<uint8_t> EncodeMessage(const Message& message) {
+  std::vector<uint8_t> bytes(static_cast<size_t>(message.getEncodedSize()));
+  message.encode(bytes.data(), 0, static_cast<int>(bytes.size()));
+  return bytes;
+}
 
 // Decodes `size` bytes into `out`; "" on success, otherwise why the buffer is
 // not a valid message ("not a valid image_t: ..."). Never throws.

@@ -4,6 +4,7 @@
 #include <cstdio>
 #include <stdexcept>
 
+#include "runtime/lcm/bus_auth.h"
 #include "runtime/process/systemd_unit.h"
 
 namespace shapesense {
@@ -71,12 +72,8 @@ std::vector<std::pair<std::string, std::string>> RigEnvironment(const RigFile& r
     environment.emplace_back("SHAPESENSE_CHANNEL_NETWORKS", ChannelNetworks::Format(rig.channels));
   }
   if (!host.keys.empty()) {
-    std::string files;
-    for (const std::string& key : host.keys) {
-      if (!files.empty()) files += ':';
-      files += key;
-    }
-    environment.emplace_back("SHAPESENSE_KEY_FILES", files);
+    environment.emplace_back("SHAPESENSE_KEY_FILES",
+                             FormatKeyFiles({host.keys.begin(), host.keys.end()}));
   }
   if (rig.insecure) environment.emplace_back("SHAPESENSE_INSECURE", "1");
   return environment;

@@ -4,6 +4,7 @@
 #include <openssl/rand.h>
 #include <sys/stat.h>
 #include <unistd.h>
+#include <chrono>
 
 #include <cerrno>
 #include <cstring>
@@ -42,6 +43,12 @@ std::string ModeText(mode_t mode) {
 }
 
 }  // namespace
+
+uint32_t KeyIdFromClock() {
+  return static_cast<uint32_t>(std::chrono::duration_cast<std::chrono::seconds>(
+                                   std::chrono::system_clock::now().time_since_epoch())
+                                   .count());
+}
 
 AuthKey NewAuthKey(uint32_t id) {
   AuthKey key;

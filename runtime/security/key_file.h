@@ -11,6 +11,9 @@
 
 namespace shapesense {
 
+// A key id from the clock, in seconds: a newer key has a larger id.
+uint32_t KeyIdFromClock();
+
 // A new key with a secret from OpenSSL's RAND_bytes (the kernel's entropy).
 // Throws std::runtime_error when the generator fails.
 AuthKey NewAuthKey(uint32_t id);

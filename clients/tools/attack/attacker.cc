@@ -26,13 +26,6 @@ const std::vector<std::string>& ListenedChannels() {
   return listened;
 }
 
-template <class Message>
-std::vector<uint8_t> Encode(const Message& message) {
-  std::vector<uint8_t> bytes(static_cast<size_t>(message.getEncodedSize()));
-  message.encode(bytes.data(), 0, static_cast<int>(bytes.size()));
-  return bytes;
-}
-
 configuration_target_t ForgedTarget(int64_t now) {
   configuration_target_t target{};
   target.header.utime = now;
@@ -131,14 +124,14 @@ void Attacker::AttackOnce(int64_t now) {
       message.header.auth.counter += 1000;
     }
     for (uint8_t& b : message.header.auth.mac) b = static_cast<uint8_t>(byte(random_));
-    return Encode(message);
+    return EncodeMessage(message);
   };
   const std::string shape = channels::kShape;
   const std::string target = channels::kTarget;
   const std::string plant = channels::kPlantCommand;
   switch (round % 10) {
     case 0:
-      return Send("unsigned_target", target, Encode(ForgedTarget(now)));
+      return Send("unsigned_target", target, EncodeMessage(ForgedTarget(now)));
     case 1:
       return Send("foreign_key_shape", shape,
                   EncodeSigned(ForgedShape(now, round), impostor, options_.prefix + shape, 0));
@@ -147,7 +140,7 @@ void Attacker::AttackOnce(int64_t now) {
     case 3:
       return Send("replayed_shape", shape, Recorded(shape, 0, now));
     case 4:
-      return Send("unsigned_shape", shape, Encode(ForgedShape(now, round)));
+      return Send("unsigned_shape", shape, EncodeMessage(ForgedShape(now, round)));
     case 5:
       return Send("forged_mac_target", target, borrow_identity(ForgedTarget(now), shape));
     case 6:

@@ -1,7 +1,5 @@
 #include "clients/tools/demo/demo_auth.h"
 
-#include <chrono>
-
 #include "runtime/security/key_file.h"
 
 namespace shapesense {
@@ -19,9 +17,7 @@ AuthOptions PrepareDemoAuth(const AuthOptions& given, const fs::path& setup_dir,
   fs::create_directories(setup_dir);
   const fs::path key = setup_dir / "rig.key";
   fs::remove(key);  // the last run's: each run has a key of its own
-  const auto seconds = std::chrono::duration_cast<std::chrono::seconds>(
-      std::chrono::system_clock::now().time_since_epoch());
-  WriteKeyFile(key, NewAuthKey(static_cast<uint32_t>(seconds.count())));
+  WriteKeyFile(key, NewAuthKey(KeyIdFromClock()));
   auth.key_files = {key};
   return auth;
 }
@@ -30,12 +26,11 @@ std::vector<std::pair<std::string, std::string>> AuthEnvironment(const AuthOptio
   if (auth.key_files.empty()) {
     return {{"SHAPESENSE_INSECURE", auth.insecure ? "1" : "0"}, {"SHAPESENSE_KEY_FILES", ""}};
   }
-  std::string files;
-  for (const fs::path& key : auth.key_files) {
-    if (!files.empty()) files += ':';
-    files += key.string();
-  }
-  return {{"SHAPESENSE_KEY_FILES", files}, {"SHAPESENSE_INSECURE", "0"}};
+  return {{"SHAPESENSE_KEY_FILES", FormatKeyFiles(auth.key_files)}, {"SHAPESENSE_INSECURE", "0"}};
+}
+
+void AddAuthEnvironment(const AuthOptions& auth, ProgramSpec* program) {
+  for (auto& variable : AuthEnvironment(auth)) program->environment.push_back(std::move(variable));
 }
 
 }  // namespace shapesense

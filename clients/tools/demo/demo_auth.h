@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "runtime/lcm/bus_auth.h"
+#include "runtime/process/process_group.h"
 
 namespace shapesense {
 
@@ -22,5 +23,6 @@ AuthOptions PrepareDemoAuth(const AuthOptions& given, const std::filesystem::pat
 // What a program's environment needs to authenticate as `auth` says
 // (SHAPESENSE_KEY_FILES or SHAPESENSE_INSECURE).
 std::vector<std::pair<std::string, std::string>> AuthEnvironment(const AuthOptions& auth);
+void AddAuthEnvironment(const AuthOptions& auth, ProgramSpec* program);
 
 }  // namespace shapesense

@@ -179,7 +179,7 @@ ProgramSpec ControllerRun(const DemoSettings& settings, const fs::path& config,
       "",
       "controller",
       false};
-  process.environment = AuthEnvironment(settings.auth);
+  AddAuthEnvironment(settings.auth, &process);
   return process;
 }
 
@@ -215,7 +215,7 @@ DemoPlan MakeDemoPlan(const DemoSettings& settings) {
   plan.pipeline.push_back(Service(settings, plan, "shape"));
   plan.pipeline.push_back(Capture(settings, plan));
   for (std::vector<ProgramSpec>* phase : {&plan.background, &plan.pipeline}) {
-    for (ProgramSpec& process : *phase) process.environment = AuthEnvironment(settings.auth);
+    for (ProgramSpec& process : *phase) AddAuthEnvironment(settings.auth, &process);
   }
   return plan;
 }

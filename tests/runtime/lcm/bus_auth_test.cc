@@ -154,14 +154,29 @@ TEST(BusAuthTest, AFlipThatTurnsAReleaseIntoAnEngageStopsTheRobotAndNothingElseP
   EXPECT_TRUE(flipped.engaged);
 }
 
+// A recognisable MAC, a host and a sender of their own lengths: the MAC's
+// bytes are where MacOffset says.
+template <class Message>
+void ExpectMacAtItsOffset(Message message) {
+  message.header.host = "camera";
+  message.header.auth.sender = "camera/shapesense-shape";
+  for (size_t i = 0; i < kMacBytes; ++i) {
+    message.header.auth.mac[i] = static_cast<uint8_t>(0xa0 + i);
+  }
+  const std::vector<uint8_t> bytes = EncodeMessage(message);
+  const size_t offset = MacOffset(message);
+  ASSERT_LE(offset + kMacBytes, bytes.size()) << Message::getTypeName();
+  for (size_t i = 0; i < kMacBytes; ++i) {
+    EXPECT_EQ(bytes[offset + i], 0xa0 + i) << Message::getTypeName() << " byte " << i;
+  }
+}
+
 TEST(BusAuthTest, TheMacSitsAtTheEndOfTheHeaderInEveryType) {
-  shape_t shape = Shape();
-  shape.header.host = "camera";
-  for (size_t i = 0; i < kMacBytes; ++i) shape.header.auth.mac[i] = static_cast<uint8_t>(0xa0 + i);
-  std::vector<uint8_t> bytes(static_cast<size_t>(shape.getEncodedSize()));
-  shape.encode(bytes.data(), 0, static_cast<int>(bytes.size()));
-  const size_t offset = MacOffset(shape);
-  for (size_t i = 0; i < kMacBytes; ++i) EXPECT_EQ(bytes[offset + i], 0xa0 + i);
+  ExpectMacAtItsOffset(Target());
+  ExpectMacAtItsOffset(Estop(false));
+  ExpectMacAtItsOffset(Command());
+  ExpectMacAtItsOffset(State());
+  ExpectMacAtItsOffset(Shape());
 }
 
 // Several buses on one network, and a raw LCM for what no bus would send.
