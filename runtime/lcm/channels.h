@@ -19,6 +19,10 @@ inline std::string Silhouette(const std::string& camera) {
   return "SHAPESENSE_SILHOUETTE_" + camera;
 }
 inline constexpr const char* kSilhouettePattern = "SHAPESENSE_SILHOUETTE_.*";
+// A camera's preview for people (the web monitor): image_t, a small JPEG,
+// a few a second, on the rig network.
+inline std::string Preview(const std::string& camera) { return "SHAPESENSE_PREVIEW_" + camera; }
+inline constexpr const char* kPreviewPattern = "SHAPESENSE_PREVIEW_.*";
 // The silhouettes of each frame-set, compact (what the shape service refines
 // against): silhouettes_t, one datagram.
 inline constexpr const char* kSilhouettes = "SHAPESENSE_SILHOUETTES";

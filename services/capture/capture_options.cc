@@ -61,6 +61,7 @@ std::string CaptureServiceOptions::Validate() const {
   }
   if (const std::string error = simulation.Validate(); !error.empty()) return "simulation." + error;
   if (const std::string error = background.Validate(); !error.empty()) return "background." + error;
+  if (const std::string error = preview.Validate(); !error.empty()) return "preview." + error;
   return "";
 }
 

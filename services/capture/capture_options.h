@@ -5,6 +5,7 @@
 #include <vector>
 
 #include "services/capture/camera_backend.h"
+#include "services/capture/preview_publisher.h"
 #include "services/capture/simulated_world.h"
 
 namespace shapesense {
@@ -40,6 +41,7 @@ struct CaptureServiceOptions {
   bool publish_truth = true;
   SimulationOptions simulation;
   BackgroundOptions background;
+  PreviewOptions preview;
 
   template <class Visitor>
   void VisitFields(Visitor&& visit) {
@@ -53,6 +55,8 @@ struct CaptureServiceOptions {
     visit("publish_truth", publish_truth, "simulated cameras: publish the ground truth");
     visit("simulation", simulation, "the simulated manipulator's trajectory and rendering");
     visit("background", background, "the background command");
+    visit("preview", preview,
+          "small JPEGs of each camera for the web monitor, on SHAPESENSE_PREVIEW_<camera>");
   }
   // Also checks every camera (keys named cameras[i].key) and unique names;
   // an empty camera list is valid here (cameras may come from --camera).

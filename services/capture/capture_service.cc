@@ -77,7 +77,10 @@ class CaptureService {
         image_buses_(bus, args.options.cameras.size()),
         compression_(ParseCompression(args.options.compression)),
         log_(args.log ? args.log : LogToStderr),
-        started_(static_cast<std::ptrdiff_t>(args.options.cameras.size())) {}
+        started_(static_cast<std::ptrdiff_t>(args.options.cameras.size())),
+        previews_(
+            options_.preview, options_.trigger_rate_hz,
+            [this](const std::string& channel, image_t& preview) { Publish(channel, preview); }) {}
 
   CaptureSummary Run(const std::atomic<bool>& stop);
 
@@ -125,6 +128,7 @@ class CaptureService {
   std::atomic<int64_t> triggers_{0};
   int64_t truth_seq_ = 0;
   int64_t stale_trigger_us_ = 0;
+  PreviewPublisher previews_;  // last: its thread publishes through the above
 };
 
 void CaptureService::MakeSlots() {
@@ -215,6 +219,7 @@ void CaptureService::PublishFrame(CameraSlot& slot, const CameraFrame& frame) {
   }
   ++slot.published;
   status_.Published();
+  previews_.Offer(slot.config.name, frame);
   if (slot.gap_open) ReportGap(slot, frame);
   slot.last_image_utime = frame.host_utime;
   slot.last_image_seq = frame.trigger_seq;
