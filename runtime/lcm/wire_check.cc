@@ -15,8 +15,8 @@ constexpr size_t kStageTail = 16;  // stage_time_t after its name: duration_us, 
 constexpr size_t kImageFixed = 4 + 4 + 4 + 1 + 1 + 4 + 4 + 8 + 8 + 8 + 8 + 8;
 constexpr size_t kVoxelFixed = 8 + 8 + 3 * 8 + 8 + 3 * 4;     // trigger_seq ... dims
 constexpr size_t kShapeTail = 3 * 8 + 8 + 1 + 4 * 8 + 8 + 8;  // tip ... configuration_residual_mm
-constexpr size_t kCommandTail = 8 + 1;                        // source_trigger_seq, mode
-constexpr size_t kTendonStateEach = 8 + 8 + 4;                // displacement_mm, tension_n, fault
+constexpr size_t kCommandTail = 8 + 1 + 4;      // source_trigger_seq, mode, gate_reasons
+constexpr size_t kTendonStateEach = 8 + 8 + 4;  // displacement_mm, tension_n, fault
 
 // Walks a buffer, failing as soon as a length does not fit.
 class WireWalker {

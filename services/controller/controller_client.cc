@@ -412,6 +412,7 @@ void ControllerClient::PublishCommand() {
   command.source_trigger_seq =
       controller_->mode() == ControlMode::kOpenLoop ? -1 : record_.sensed_trigger_seq;
   command.mode = record_.mode;
+  command.gate_reasons = static_cast<int32_t>(record_.reasons);
   if (bus_.Publish(channels::kTendonCommand, command)) status_.Published();
   log_.WriteEvent(channels::kTendonCommand, command, record_.utime);
 }
