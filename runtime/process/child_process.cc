@@ -19,6 +19,9 @@
 namespace shapesense {
 namespace {
 
+constexpr int kListenFd = 3;    // SD_LISTEN_FDS_START
+constexpr int kPidDigits = 12;  // room for any pid, written in the child
+
 struct Pipe {
   int read = -1;
   int write = -1;
@@ -77,9 +80,25 @@ void PlaceChild(const ChildOptions& options, int error_fd) {
 
 // In the forked child: only async-signal-safe calls (the environment was
 // built before the fork). A failure is reported on `error_fd`.
+// Writes the child's pid into LISTEN_PID's value (room made before the
+// fork) and puts the socket at fd 3, as systemd does.
+void PassListeningSocket(int socket, char* listen_pid_value, int* error_fd) {
+  char digits[16];
+  int n = 0;
+  for (pid_t pid = getpid(); pid > 0; pid /= 10) digits[n++] = static_cast<char>('0' + pid % 10);
+  for (int i = 0; i < n; ++i) listen_pid_value[i] = digits[n - 1 - i];
+  listen_pid_value[n] = '\0';
+  if (*error_fd == kListenFd) *error_fd = fcntl(*error_fd, F_DUPFD_CLOEXEC, kListenFd + 1);
+  if (socket == kListenFd) {
+    fcntl(kListenFd, F_SETFD, 0);
+  } else if (dup2(socket, kListenFd) < 0) {
+    FailChild(*error_fd, ChildStep::kExec);
+  }
+}
+
 [[noreturn]] void ExecChild(char* const* args, char* const* environment,
                             const ChildOptions& options, const Pipe& out, int error_fd,
-                            pid_t parent) {
+                            pid_t parent, char* listen_pid_value) {
   if (options.own_process_group) setpgid(0, 0);
   if (options.end_with_parent) {
     prctl(PR_SET_PDEATHSIG, SIGTERM);
@@ -88,6 +107,9 @@ void PlaceChild(const ChildOptions& options, int error_fd) {
   PlaceChild(options, error_fd);
   dup2(out.write, STDOUT_FILENO);
   if (options.capture_stderr) dup2(out.write, STDERR_FILENO);
+  if (options.listen_socket >= 0) {
+    PassListeningSocket(options.listen_socket, listen_pid_value, &error_fd);
+  }
   if (options.nice != 0 && setpriority(PRIO_PROCESS, 0, options.nice) != 0) {
     constexpr char kRefused[] = "nice: priority refused (no privilege); normal priority\n";
     if (write(STDERR_FILENO, kRefused, sizeof(kRefused) - 1) < 0) {
@@ -138,8 +160,19 @@ std::vector<char*> ExecArray(const std::vector<std::string>& strings) {
 ChildProcess::ChildProcess(const std::vector<std::string>& argv, const ChildOptions& options) {
   if (argv.empty()) throw std::runtime_error("ChildProcess: no program given");
   const std::vector<char*> args = ExecArray(argv);
-  const std::vector<std::string> environment_entries = ChildEnvironment(options.environment);
+  std::vector<std::pair<std::string, std::string>> variables = options.environment;
+  if (options.listen_socket >= 0) {
+    variables.emplace_back("LISTEN_FDS", "1");
+    variables.emplace_back("LISTEN_PID", std::string(kPidDigits, ' '));  // the child fills it in
+  }
+  const std::vector<std::string> environment_entries = ChildEnvironment(variables);
   const std::vector<char*> environment = ExecArray(environment_entries);
+  char* listen_pid_value = nullptr;
+  for (char* entry : environment) {
+    if (entry != nullptr && std::string_view(entry).starts_with("LISTEN_PID=")) {
+      listen_pid_value = entry + std::strlen("LISTEN_PID=");
+    }
+  }
   if (!options.log_file.empty()) log_.open(options.log_file, std::ios::app);
   const Pipe out = MakePipe();
   const Pipe exec_error = MakePipe();
@@ -147,7 +180,8 @@ ChildProcess::ChildProcess(const std::vector<std::string>& argv, const ChildOpti
   pid_ = fork();
   if (pid_ < 0) throw std::runtime_error("fork() failed");
   if (pid_ == 0) {
-    ExecChild(args.data(), environment.data(), options, out, exec_error.write, parent);
+    ExecChild(args.data(), environment.data(), options, out, exec_error.write, parent,
+              listen_pid_value);
   }
   if (options.own_process_group) setpgid(pid_, pid_);  // either side may be first
   close(out.write);

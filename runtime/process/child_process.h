@@ -39,6 +39,10 @@ struct ChildOptions {
   std::string host_name = {};
   // Variables set in the child's environment (replacing the parent's).
   std::vector<std::pair<std::string, std::string>> environment = {};
+  // A listening socket handed to the child as systemd hands one to a
+  // socket-activated service: as fd 3, with LISTEN_FDS=1 and LISTEN_PID set
+  // to the child's pid (sd_listen_fds). -1: none.
+  int listen_socket = -1;
 };
 
 class ChildProcess {

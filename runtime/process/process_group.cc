@@ -63,6 +63,7 @@ std::unique_ptr<ChildProcess> ProcessGroup::StartChild(const ProgramSpec& proces
   options.network_namespace = process.network_namespace;
   options.host_name = process.host_name;
   options.environment = process.environment;
+  options.listen_socket = process.listen_socket;
   if (!keep_log) fs::remove(options.log_file);
   try {
     return std::make_unique<ChildProcess>(process.argv, options);

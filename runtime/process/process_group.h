@@ -46,6 +46,8 @@ struct ProgramSpec {
   // for systemd's Restart=on-failure in the tests and the demo's faults. Its
   // output goes on in the same log. An end after 5 restarts is a failure.
   bool restart = false;
+  // A listening socket it gets as systemd would pass it (ChildOptions); -1: none.
+  int listen_socket = -1;
 };
 
 // A program of the group failed: it could not start, ended early, or never

@@ -2,8 +2,12 @@
 
 #include <systemd/sd-daemon.h>
 
+#include <sys/socket.h>
+
 #include <cstdint>
 #include <cstdlib>
+#include <cstring>
+#include <stdexcept>
 
 namespace shapesense {
 namespace {
@@ -45,6 +49,20 @@ void SystemdNotifier::Send(const std::string& state) const {
   // A supervisor that went away must not stop the service: the result is
   // only whether systemd heard, and there is nothing better to do if not.
   sd_notify(0, state.c_str());
+}
+
+int TakeListeningSocket() {
+  const int count = sd_listen_fds(1);
+  if (count < 0) throw std::runtime_error("LISTEN_FDS: " + std::string(strerror(-count)));
+  if (count == 0) return -1;
+  if (count > 1) {
+    throw std::runtime_error("LISTEN_FDS: " + std::to_string(count) +
+                             " sockets passed, expected one (the HTTP port)");
+  }
+  if (sd_is_socket(SD_LISTEN_FDS_START, AF_UNSPEC, SOCK_STREAM, 1) <= 0) {
+    throw std::runtime_error("LISTEN_FDS: the socket passed is not a listening TCP socket");
+  }
+  return SD_LISTEN_FDS_START;
 }
 
 }  // namespace shapesense

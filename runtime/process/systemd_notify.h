@@ -48,4 +48,11 @@ class SystemdNotifier {
   std::function<bool()> healthy_;
 };
 
+// The listening socket that systemd (a .socket unit) or a parent using its
+// protocol (LISTEN_FDS, LISTEN_PID: the demo hands the monitor a socket
+// made in the host's network) passed to this process; -1 when none. Throws
+// std::runtime_error when several were passed or it is not a listening
+// TCP socket. Unsets the variables, so that children do not see them.
+int TakeListeningSocket();
+
 }  // namespace shapesense
