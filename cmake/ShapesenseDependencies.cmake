@@ -53,6 +53,11 @@ shapesense_require(LIBSYSTEMD_FOUND "libsystemd-dev" "libsystemd")
 find_package(OpenSSL QUIET COMPONENTS Crypto)
 shapesense_require(OPENSSL_FOUND "libssl-dev" "OpenSSL (libcrypto)")
 
+# Boost.Beast and Asio (header-only): the web monitor's HTTP and WebSocket
+# server (docs/monitor.md), and the WebSocket clients of its tests.
+find_package(Boost 1.74 QUIET)
+shapesense_require(Boost_FOUND libboost-dev "Boost 1.74 (Beast, Asio)")
+
 if(SHAPESENSE_BUILD_TESTS)
   find_package(GTest QUIET)
   shapesense_require(GTest_FOUND "libgtest-dev libgmock-dev" "GoogleTest")

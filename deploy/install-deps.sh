@@ -15,8 +15,16 @@ PACKAGES=(
   iproute2 socat
   libsystemd-dev systemd
   libssl-dev
+  libboost-dev libjs-three
+  chromium
   clang-format clang-tidy
 )
+
+# Node.js and npm run the browser test's driver (playwright-core, from
+# tests/browser's lock file); Debian's when the machine has none of its own.
+if ! command -v node > /dev/null || ! command -v npm > /dev/null; then
+  PACKAGES+=(nodejs npm)
+fi
 
 missing=()
 for package in "${PACKAGES[@]}"; do

@@ -49,12 +49,17 @@ const char* ProgramStateName(ProgramState state) {
 
 std::string StatusServiceOf(const std::string& program) {
   if (program == "rig-sim") return "rig_sim";
-  static const std::set<std::string> with_status = {"capture", "carving", "shape", "controller"};
+  static const std::set<std::string> with_status = {"capture", "carving", "shape", "controller",
+                                                    "monitor"};
   return with_status.count(program) > 0 ? program : "";
 }
 
-RigStatusBoard::RigStatusBoard(std::optional<RigFile> rig, double stale_after_s)
-    : rig_(std::move(rig)), stale_after_s_(stale_after_s) {}
+RigStatusBoard::RigStatusBoard(std::optional<RigFile> rig, double stale_after_s,
+                               double missing_after_s, bool expect_heard)
+    : rig_(std::move(rig)),
+      stale_after_s_(stale_after_s),
+      missing_after_s_(missing_after_s),
+      expect_heard_(expect_heard) {}
 
 void RigStatusBoard::Observe(const service_status_t& status, int64_t receive_utime) {
   heard_[{status.host, status.service}] = {status, receive_utime};
@@ -82,7 +87,10 @@ std::vector<RigStatusRow> RigStatusBoard::Rows(int64_t now_utime) const {
   }
   for (const auto& [key, heard] : heard_) {
     if (expected.count(key) == 0) {
-      rows.push_back({key.first, key.second, ProgramState::kUnexpected, std::nullopt, 0.0});
+      const bool expected_once_heard = expect_heard_ && !rig_;
+      rows.push_back({key.first, key.second,
+                      expected_once_heard ? ProgramState::kUp : ProgramState::kUnexpected,
+                      std::nullopt, 0.0});
     }
   }
   for (RigStatusRow& row : rows) {
@@ -90,8 +98,11 @@ std::vector<RigStatusRow> RigStatusBoard::Rows(int64_t now_utime) const {
     if (found == heard_.end()) continue;
     row.last = found->second.status;
     row.status_age_s = static_cast<double>(now_utime - found->second.receive_utime) * 1e-6;
-    if (row.state == ProgramState::kUnexpected) continue;
-    row.state = row.status_age_s > stale_after_s_ ? ProgramState::kStale : ProgramState::kUp;
+    if (row.status_age_s > missing_after_s_) {
+      row.state = ProgramState::kMissing;
+    } else if (row.state != ProgramState::kUnexpected) {
+      row.state = row.status_age_s > stale_after_s_ ? ProgramState::kStale : ProgramState::kUp;
+    }
   }
   return rows;
 }
@@ -161,6 +172,7 @@ std::string RigStatusBoard::Json(int64_t now_utime) const {
                    {"rss_bytes", s.rss_bytes},
                    {"clock_offsets_ms", offsets},
                    {"clock_warning", s.clock_warning},
+                   {"auth", s.auth},
                    {"last_error", s.last_error}});
     }
     rows.push_back(item);

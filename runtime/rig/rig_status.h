@@ -6,6 +6,7 @@
 // and the latency of each stage of the last shape. Fed by the command's LCM
 // bus; no I/O here.
 #include <cstdint>
+#include <limits>
 #include <map>
 #include <optional>
 #include <string>
@@ -35,9 +36,13 @@ std::string StatusServiceOf(const std::string& program);
 class RigStatusBoard {
  public:
   // `rig`: the expected programs (none: every program heard is shown as
-  // unexpected, and nothing is missing). A status older than
-  // `stale_after_s` is stale (the services publish every second).
-  explicit RigStatusBoard(std::optional<RigFile> rig, double stale_after_s = 3.0);
+  // unexpected, or as expected with `expect_heard`, and nothing is missing
+  // until it falls silent). A status older than `stale_after_s` is stale
+  // (the services publish every second), and older than `missing_after_s`
+  // missing.
+  explicit RigStatusBoard(std::optional<RigFile> rig, double stale_after_s = 3.0,
+                          double missing_after_s = std::numeric_limits<double>::infinity(),
+                          bool expect_heard = false);
 
   void Observe(const service_status_t& status, int64_t receive_utime);
   void Observe(const shape_t& shape);
@@ -58,6 +63,8 @@ class RigStatusBoard {
   };
   std::optional<RigFile> rig_;
   double stale_after_s_;
+  double missing_after_s_;
+  bool expect_heard_;
   std::map<std::pair<std::string, std::string>, Heard> heard_;  // (host, service)
   std::vector<std::pair<std::string, double>> stages_;
 };
