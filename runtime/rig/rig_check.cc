@@ -25,7 +25,8 @@ std::vector<std::string> PerCamera(std::string (*channel)(const std::string&),
 // plant link and truth) or read (monitoring silhouettes, command echoes).
 bool OptionalToPublish(const std::string& channel) {
   return channel == ch::kEstop || channel == ch::kPlantCommand || channel == ch::kPlantState ||
-         channel == ch::kTruth || channel == ch::kTarget;
+         channel == ch::kTruth || channel == ch::kTarget || channel == ch::kTendonCommand ||
+         channel == ch::kTendonState || channel.rfind("SHAPESENSE_PREVIEW_", 0) == 0;
 }
 bool MustBeRead(const std::string& channel) {
   return channel.rfind("SHAPESENSE_IMAGE_", 0) == 0 || channel == ch::kVoxels ||
@@ -124,7 +125,7 @@ void CheckHosts(const RigFile& rig, std::vector<std::string>* problems) {
       if (!IsKnownProgram(program.program)) {
         problems->push_back(where +
                             ": unknown program (rig-sim, capture, carving, shape, "
-                            "controller, lcm-logger, rig-status)");
+                            "controller, lcm-logger, rig-status, monitor)");
       }
       if (program.realtime_priority < 0 || program.realtime_priority > 99) {
         problems->push_back(where + ": realtime_priority: expected 0-99");
@@ -173,14 +174,19 @@ void CheckChannels(const RigFile& rig, std::vector<std::string>* problems) {
 }  // namespace
 
 bool IsKnownProgram(const std::string& program) {
-  static const std::set<std::string> known = {"rig-sim",    "capture",    "carving",   "shape",
-                                              "controller", "lcm-logger", "rig-status"};
+  static const std::set<std::string> known = {"rig-sim",    "capture",    "carving",    "shape",
+                                              "controller", "lcm-logger", "rig-status", "monitor"};
   return known.count(program) > 0;
 }
 
 ProgramChannels ChannelsOf(const std::string& program, const std::vector<std::string>& cameras) {
   if (program == "rig-sim") return {{ch::kTruth, ch::kPlantState}, {ch::kPlantCommand}};
-  if (program == "capture") return {PerCamera(&ch::Image, cameras), {}};
+  if (program == "capture") {
+    std::vector<std::string> publishes = PerCamera(&ch::Image, cameras);
+    for (const std::string& preview : PerCamera(&ch::Preview, cameras))
+      publishes.push_back(preview);
+    return {publishes, {}};
+  }
   if (program == "carving") {
     std::vector<std::string> publishes = PerCamera(&ch::Silhouette, cameras);
     publishes.insert(publishes.end(), {ch::kSilhouettes, ch::kVoxels});
@@ -193,6 +199,12 @@ ProgramChannels ChannelsOf(const std::string& program, const std::vector<std::st
   }
   if (program == "lcm-logger") return {{}, {}, true};
   if (program == "rig-status") return {{}, {ch::kShape}};
+  if (program == "monitor") {
+    std::vector<std::string> reads = PerCamera(&ch::Preview, cameras);
+    reads.insert(reads.end(), {ch::kShape, ch::kSilhouettes, ch::kTarget, ch::kTendonCommand,
+                               ch::kTendonState, ch::kEstop, ch::kTruth});
+    return {{ch::kEstop}, reads};
+  }
   return {};
 }
 

@@ -29,8 +29,14 @@ std::vector<std::string> Command(const RigFile& rig, const RigProgram& program,
   } else {
     command = {(bin_dir / ("shapesense-" + program.program)).string()};
   }
+  if (program.program == "monitor") {
+    // The expected programs of its health table are the rig file's.
+    command.push_back("--rig");
+    command.push_back(std::filesystem::absolute(rig.path).string());
+  }
   if (!program.config.empty()) {
-    command.push_back("--config");
+    // The monitor's config is the shape service's (its calibration and manipulator).
+    command.push_back(program.program == "monitor" ? "--shape-config" : "--config");
     command.push_back(
         std::filesystem::absolute(rig.path.parent_path() / program.config).lexically_normal());
   }

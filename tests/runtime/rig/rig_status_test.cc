@@ -41,20 +41,37 @@ TEST(RigStatusTest, ExpectedProgramsAreUpStaleOrMissingAndStrangersAreShown) {
   }
   board.Observe(Status("laptop", "shape"), t0);
   std::vector<RigStatusRow> rows = board.Rows(t0 + 500'000);
-  ASSERT_EQ(rows.size(), 5u);
+  ASSERT_EQ(rows.size(), 6u);  // capture, carving, shape, controller, monitor; the stranger
   std::map<std::string, ProgramState> state;
   for (const RigStatusRow& row : rows) state[row.host + "/" + row.service] = row.state;
   EXPECT_EQ(state["camera/carving"], ProgramState::kUp);
   EXPECT_EQ(state["control/controller"], ProgramState::kMissing);
+  EXPECT_EQ(state["operator/monitor"], ProgramState::kMissing);
   EXPECT_EQ(state["laptop/shape"], ProgramState::kUnexpected);
   EXPECT_FALSE(board.Complete(t0 + 500'000));
   board.Observe(Status("control", "controller"), t0 + 600'000);
+  board.Observe(Status("operator", "monitor"), t0 + 600'000);
   EXPECT_TRUE(board.Complete(t0 + 700'000));
   // Four seconds without a word from the camera host: stale.
   EXPECT_FALSE(board.Complete(t0 + 4'000'000));
   rows = board.Rows(t0 + 4'000'000);
   EXPECT_EQ(rows.front().state, ProgramState::kStale);
   EXPECT_NEAR(rows.front().status_age_s, 4.0, 1e-9);
+}
+
+// Without a rig file (the web monitor's view): what is heard is expected,
+// stale after one missed status, missing after two and a half.
+TEST(RigStatusTest, WithoutARigFileAProgramHeardAndFallenSilentIsMissing) {
+  RigStatusBoard board(std::nullopt, 1.6, 2.5, /*expect_heard=*/true);
+  const int64_t t0 = 1'000'000'000'000;
+  board.Observe(Status("camera", "shape"), t0);
+  const auto state = [&](int64_t age_us) { return board.Rows(t0 + age_us).at(0).state; };
+  EXPECT_EQ(state(1'000'000), ProgramState::kUp);
+  EXPECT_EQ(state(2'000'000), ProgramState::kStale);
+  EXPECT_EQ(state(2'600'000), ProgramState::kMissing);
+  RigStatusBoard plain(std::nullopt);  // `rig status` without a file: strangers, never missing
+  plain.Observe(Status("camera", "shape"), t0);
+  EXPECT_EQ(plain.Rows(t0 + 60'000'000).at(0).state, ProgramState::kUnexpected);
 }
 
 TEST(RigStatusTest, TableAndJsonCarryTheHealthOffsetsAndStages) {
