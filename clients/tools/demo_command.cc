@@ -12,6 +12,7 @@
 #include "clients/tools/demo/offline_demo.h"
 #include "libs/core/error.h"
 #include "runtime/lcm/service_loop.h"
+#include "runtime/process/listening_socket.h"
 #include "runtime/process/private_network.h"
 
 namespace shapesense {
@@ -35,7 +36,24 @@ struct DemoCommandArgs {
   bool faults = false;
   bool insecure = false;
   bool attacker = false;
+  std::string monitor = "127.0.0.1:8080";
+  bool monitor_given = false;
 };
+
+// The web monitor's socket, made here in the host's network before the demo
+// moves into a namespace of its own, so that a browser on this machine
+// reaches the monitor inside it (docs/monitor.md). The default port, when
+// taken, gives way to a free one; a port asked for must be had.
+int OpenMonitorSocket(const DemoCommandArgs& args) {
+  if (args.monitor == "off") return -1;
+  try {
+    return OpenListeningSocket(args.monitor);
+  } catch (const std::runtime_error& e) {
+    if (args.monitor_given) throw InputError(std::string("--monitor: ") + e.what());
+    std::cout << "demo: " << e.what() << "; the monitor takes a free port instead\n";
+    return OpenListeningSocket(args.monitor.substr(0, args.monitor.rfind(':')) + ":0");
+  }
+}
 
 NetworkMode ParseNetwork(const std::string& network) {
   if (network == "private") return NetworkMode::kPrivate;
@@ -66,6 +84,7 @@ void RunOffline(const DemoCommandArgs& args) {
 }
 
 void RunLive(DemoCommandArgs& args) {
+  args.live.monitor_socket = OpenMonitorSocket(args);
   // First, while this process has a single thread.
   const NetworkChoice network = EnterNetwork(ParseNetwork(args.network), kLoopbackAddresses);
   const std::atomic<bool>& stop = StopFlagOnSignals();
@@ -100,6 +119,7 @@ ExperimentArgs& ExperimentOptions(DemoCommandArgs& args, const std::string& netw
 
 // The plant lives in the rig-sim, whose cameras need the namespace's addresses.
 void RunExperiment(DemoCommandArgs& args) {
+  args.experiment.monitor_socket = OpenMonitorSocket(args);
   const NetworkChoice network = EnterNetwork(ParseNetwork(args.network), kLoopbackAddresses);
   const std::atomic<bool>& stop = StopFlagOnSignals();
   if (!network.private_namespace) {
@@ -118,6 +138,7 @@ void RunExperiment(DemoCommandArgs& args) {
 // Three hosts (network namespaces on a bridge) inside the private namespace,
 // made before any thread starts (each `ip` is a fork).
 void RunExperimentOnHosts(DemoCommandArgs& args) {
+  args.experiment.monitor_socket = OpenMonitorSocket(args);
   const NetworkChoice network = EnterNetwork(NetworkMode::kPrivate, kLoopbackAddresses);
   if (!network.private_namespace) throw InputError("--hosts 3: " + network.why_not);
   const VirtualHosts hosts(DemoHostSpecs(args.camera_clock_offset_ms, kLoopbackAddresses));
@@ -202,7 +223,12 @@ void AddDemoCommand(CLI::App& app) {
       ->capture_default_str();
   command->add_option("--voxel-size", args->voxel_size, "--offline: voxel edge, mm")
       ->capture_default_str();
-  command->callback([args] {
+  command
+      ->add_option("--monitor", args->monitor,
+                   "the web monitor's HOST:PORT on this machine's network, or off")
+      ->capture_default_str();
+  command->callback([args, command] {
+    args->monitor_given = command->count("--monitor") > 0;
     if (args->hosts != 3 && (args->faults || args->camera_clock_offset_ms != 0.0)) {
       throw InputError("--faults and --camera-clock-offset-ms need --hosts 3");
     }

@@ -108,6 +108,7 @@ DemoSettings MakeSettings(const ExperimentArgs& args, const Rig& rig, const Expe
   settings.plant_config = files.plant;
   settings.shape_config = files.shape;
   settings.log_channels = kControlChannels;  // images would be gigabytes
+  settings.monitor_socket = args.monitor_socket;
   return settings;
 }
 
@@ -476,6 +477,7 @@ bool RunPhases(const ExperimentArgs& args, const ExperimentParts& parts,
   parts.processes.StopAll();
   log << "live pipeline, the rig in plant mode, logged to " << parts.plan.log.string() << std::endl;
   if (!StartAll(parts.processes, parts.plan.pipeline, log)) return false;
+  PrintMonitorUrl(parts.settings.monitor_socket, log);
   RigNetworkWatch watch(parts.layout);
   watch.Begin();
   RunDriver driver(args, parts.settings, parts.files.controller, parts.layout, parts.processes,

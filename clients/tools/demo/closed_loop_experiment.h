@@ -61,6 +61,8 @@ struct ExperimentArgs {
   // Message authentication: key files, or insecure; neither: a new key in
   // out/setup/rig.key (demo_auth.h).
   AuthOptions auth;
+  // The web monitor's listening socket in the host's network (DemoSettings); -1: none.
+  int monitor_socket = -1;
   // Runs the attacker (experiment_attack.h) through every run.
   bool attacker = false;
 };

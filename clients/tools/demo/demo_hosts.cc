@@ -57,7 +57,7 @@ std::string DemoHostOf(const std::string& program_name) {
   if (program_name.starts_with("controller")) return kControlHostName;
   // The attacker is a laptop on the operator's side of the switch.
   if (program_name.starts_with("lcm-logger") || program_name.starts_with("rig-status") ||
-      program_name == "attacker") {
+      program_name == "attacker" || program_name == "monitor") {
     return kOperatorHostName;
   }
   throw std::invalid_argument("demo --hosts: no host for the program '" + program_name + "'");

@@ -127,6 +127,24 @@ ProgramSpec Service(const DemoSettings& settings, const DemoPlan& plan, const st
   return process;
 }
 
+// The web monitor on the socket the demo made in the host's network, the
+// shape projected through the demo's rig, targets drawn from the shape
+// service's config when it senses q.
+ProgramSpec Monitor(const DemoSettings& settings, const DemoPlan& plan) {
+  ProgramSpec process{"monitor",
+                      {Program(settings, "shapesense-monitor"), "--lcm-url", settings.lcm_url,
+                       "--calibration", plan.rig.string(), "--duration", Backstop(settings)},
+                      "shapesense-monitor: serving",
+                      "",
+                      false};
+  if (!settings.shape_config.empty()) {
+    process.argv.push_back("--shape-config");
+    process.argv.push_back(settings.shape_config.string());
+  }
+  process.listen_socket = settings.monitor_socket;
+  return process;
+}
+
 ProgramSpec Logger(const DemoSettings& settings, const DemoPlan& plan) {
   ProgramSpec process{
       "lcm-logger",
@@ -208,6 +226,7 @@ DemoPlan MakeDemoPlan(const DemoSettings& settings) {
   plan.background.push_back(CaptureBackground(settings, plan));
   if (gige) plan.pipeline.push_back(RigSim(settings, plan, false));
   plan.pipeline.push_back(Logger(settings, plan));
+  if (settings.monitor_socket >= 0) plan.pipeline.push_back(Monitor(settings, plan));
   for (size_t k = 0; HasImageBuses(settings.lcm_url) && k < plan.image_logs.size(); ++k) {
     plan.pipeline.push_back(ImageLogger(settings, plan, k));
   }

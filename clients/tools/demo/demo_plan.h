@@ -47,6 +47,9 @@ struct DemoSettings {
   std::string log_channels;
   // How every program authenticates (demo_auth.h): the run's key.
   AuthOptions auth;
+  // The web monitor's listening socket, made in the host's network before
+  // the demo entered its namespace (listening_socket.h); -1: no monitor.
+  int monitor_socket = -1;
 };
 
 // Everything but the camera images, the silhouettes and the voxels: what a

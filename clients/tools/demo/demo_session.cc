@@ -8,6 +8,7 @@
 #include "clients/tools/demo/live_demo.h"
 #include "libs/camera/rig_yaml.h"
 #include "runtime/file_io.h"
+#include "runtime/process/listening_socket.h"
 
 namespace shapesense {
 namespace fs = std::filesystem;
@@ -112,6 +113,12 @@ int64_t FileBytes(const fs::path& path) {
   std::error_code error;
   const auto bytes = fs::file_size(path, error);
   return error ? 0 : static_cast<int64_t>(bytes);
+}
+
+void PrintMonitorUrl(int monitor_socket, std::ostream& log) {
+  if (monitor_socket < 0) return;
+  log << "monitor: http://" << ListeningAddress(monitor_socket)
+      << "/ (open it in a browser on this machine; it lives while the pipeline runs)" << std::endl;
 }
 
 }  // namespace shapesense

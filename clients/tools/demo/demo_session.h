@@ -47,4 +47,8 @@ double SecondsSince(std::chrono::steady_clock::time_point start);
 // A file's size, 0 when it is not there.
 int64_t FileBytes(const std::filesystem::path& path);
 
+// "monitor: http://127.0.0.1:8080/ ..." when the demo runs a web monitor
+// on `monitor_socket` (-1: none).
+void PrintMonitorUrl(int monitor_socket, std::ostream& log);
+
 }  // namespace shapesense

@@ -36,6 +36,7 @@ DemoSettings MakeSettings(const LiveDemoArgs& args, const Rig& rig) {
       BaseDemoSettings(args.bin_dir, args.lcm_logger, args.out, rig, args.rate_hz, args.seed);
   settings.cameras = args.cameras;
   settings.duration_s = args.duration_s;
+  settings.monitor_socket = args.monitor_socket;
   return settings;
 }
 
@@ -139,6 +140,7 @@ bool RunPhases(const LiveDemoArgs& args, const DemoPlan& plan, ProcessGroup& pro
   processes.StopAll();
   log << "live pipeline, logged to " << plan.log.string() << std::endl;
   if (!StartAll(processes, plan.pipeline, log)) return false;
+  PrintMonitorUrl(args.monitor_socket, log);
   const int64_t start_utime = NowUtime();
   log << "measuring for " << args.duration_s << " s (Ctrl-C stops early)" << std::endl;
   report.measured_s = Measure(args, processes, bus, scorer, stop, log);

@@ -39,6 +39,8 @@ struct LiveDemoArgs {
   // Message authentication: key files, or insecure; neither: a new key in
   // out/setup/rig.key (demo_auth.h).
   AuthOptions auth;
+  // The web monitor's listening socket in the host's network (DemoSettings); -1: none.
+  int monitor_socket = -1;
 };
 
 // Runs it; `stop` (Ctrl-C) ends the run early, cleanly: every program
