@@ -148,6 +148,7 @@ class LivePipeline {
   std::string StopAll();
 
   ChildProcess& rig_sim() { return *rig_sim_; }
+  ChildProcess& shape_service() { return *shape_; }
 
   int64_t capture_start_utime() const { return capture_start_utime_; }
   int64_t capture_end_utime() const { return capture_end_utime_; }
