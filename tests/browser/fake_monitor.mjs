@@ -21,7 +21,9 @@ import { fileURLToPath } from 'node:url';
 import * as rig from './synthetic_rig.mjs';
 
 const HERE = path.dirname(fileURLToPath(import.meta.url));
-export const WEB_DIR = path.resolve(HERE, '../../services/monitor/web');
+// The page's folder: beside this one in the repository, or where SHAPESENSE_MONITOR_WEB says
+// (the build tree runs a copy of these scripts next to its node_modules).
+export const WEB_DIR = process.env.SHAPESENSE_MONITOR_WEB || path.resolve(HERE, '../../services/monitor/web');
 export const VENDOR = {
   'three.min.js': '/usr/share/javascript/three/build/three.min.js',
   'OrbitControls.js': '/usr/share/javascript/three/examples/js/controls/OrbitControls.js',

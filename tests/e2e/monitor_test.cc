@@ -25,6 +25,7 @@
 #include <sstream>
 
 #include "runtime/file_io.h"
+#include "runtime/lcm/channels.h"
 #include "runtime/lcm/lcm_bus.h"
 #include "tests/e2e/live_pipeline.h"
 
@@ -100,19 +101,43 @@ FoxgloveSession ListenAsFoxglove(const std::string& url, seconds timeout) {
   return session;
 }
 
+constexpr const char* kToken = "e2e-estop-token-0123456789";
+
+// A page's e-stop request with `token`; the monitor's answer.
+json PressEstop(const std::string& url, const std::string& token) {
+  asio::io_context io;
+  websocket::stream<tcp::socket> ws(io);
+  ws.next_layer().connect(EndpointOf(url));
+  ws.handshake("127.0.0.1", "/ws");
+  beast::flat_buffer hello;
+  ws.read(hello);
+  ws.write(asio::buffer(json{{"type", "estop"}, {"token", token}}.dump()));
+  for (;;) {  // the latest of each channel comes too
+    beast::flat_buffer buffer;
+    ws.read(buffer);
+    if (!ws.got_text()) continue;
+    const json message = json::parse(beast::buffers_to_string(buffer.data()));
+    if (message["type"] == "estop_result") return message;
+  }
+}
+
 class MonitorTest : public ::testing::Test {
  protected:
   MonitorTest() : pipeline_("monitor") {}
 
-  // The monitor on a free port of the namespace's loopback; its URL.
+  // The monitor on a free port of the namespace's loopback, with an e-stop
+  // token; its URL.
   std::string StartMonitor() {
+    const fs::path token = pipeline_.dir() / "estop.token";
+    std::ofstream(token) << kToken << '\n';
+    fs::permissions(token, fs::perms::owner_read | fs::perms::owner_write);
     ChildOptions options;
     options.capture_stderr = true;
     options.log_file = pipeline_.dir() / "monitor.log";
     monitor_ = std::make_unique<ChildProcess>(
         std::vector<std::string>{E2E_MONITOR, "--http", "127.0.0.1:0", "--lcm-url", kLcmUrl,
                                  "--calibration", (pipeline_.dir() / "rig" / "rig.yaml").string(),
-                                 "--duration", "600"},
+                                 "--estop-token-file", token.string(), "--duration", "600"},
         options);
     if (!monitor_->WaitForLine("serving http://", milliseconds(20000))) return "";
     return ServedUrl(monitor_->output());
@@ -152,6 +177,22 @@ TEST_F(MonitorTest, FoxgloveAndABrowserSeeTheLivePipelineAndAKilledServiceGoesMi
   for (const json& row : fox.first.at("/shapesense/health")["rows"])
     programs.insert(row["program"]);
   EXPECT_EQ(programs, (std::set<std::string>{"capture", "carving", "monitor", "rig_sim", "shape"}));
+
+  // The e-stop: refused with a wrong token, published with the right one.
+  LcmBus listener(kLcmUrl);
+  std::vector<estop_t> estops;
+  listener.Subscribe<estop_t>(channels::kEstop, [&](estop_t&& estop, const std::string&, int64_t) {
+    estops.push_back(estop);
+  });
+  const json refused = PressEstop(url, "e2e-estop-token-0123456780");
+  EXPECT_FALSE(refused["ok"]) << refused.dump();
+  const json pressed = PressEstop(url, kToken);
+  EXPECT_TRUE(pressed["ok"]) << pressed.dump();
+  const auto estop_deadline = std::chrono::steady_clock::now() + seconds(5);
+  while (estops.empty() && std::chrono::steady_clock::now() < estop_deadline) listener.Handle(100);
+  ASSERT_EQ(estops.size(), 1u) << "one e-stop, from the right token only";
+  EXPECT_TRUE(estops[0].engaged);
+  EXPECT_NE(estops[0].source.find("shapesense-monitor"), std::string::npos) << estops[0].source;
 
   const fs::path out = pipeline_.dir() / "browser";
   const std::string kill = "kill -9 " + std::to_string(pipeline_.shape_service().pid());

@@ -20,6 +20,8 @@ namespace {
 constexpr double kBackgroundRateHz = 30.0;
 // The nice value of the programs that stand for hardware (ProgramSpec::nice).
 constexpr int kHardwareNice = -10;
+// The web monitor is a view: on a machine short of CPU it yields to the pipeline.
+constexpr int kViewerNice = 10;
 
 std::string Backstop(const DemoSettings& settings) {
   return std::to_string(static_cast<int>(settings.duration_s) + 600);
@@ -142,6 +144,8 @@ ProgramSpec Monitor(const DemoSettings& settings, const DemoPlan& plan) {
     process.argv.push_back(settings.shape_config.string());
   }
   process.listen_socket = settings.monitor_socket;
+  // A view: when the CPU is short, the pipeline goes first (docs/monitor.md).
+  process.nice = kViewerNice;
   return process;
 }
 

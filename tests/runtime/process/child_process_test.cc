@@ -4,6 +4,7 @@
 // and kills what does not stop; a nice value; a process group of its own;
 // and a child that ends with the thread that started it.
 #include "runtime/process/child_process.h"
+#include "runtime/process/listening_socket.h"
 
 #include <fcntl.h>
 #include <gtest/gtest.h>
@@ -115,6 +116,26 @@ TEST(ChildProcessTest, SetsTheEnvironmentAsked) {
   EXPECT_EQ(child.output(), "parent child -2.5\n3\n") << "each variable once";
   unsetenv("SHAPESENSE_CHILD_TEST_KEPT");
   unsetenv("SHAPESENSE_CHILD_TEST_REPLACED");
+}
+
+// As systemd passes a socket: fd 3, LISTEN_FDS=1 and LISTEN_PID the child's own pid.
+TEST(ChildProcessTest, HandsAListeningSocketAsSystemdWould) {
+  const int socket = OpenListeningSocket("127.0.0.1:0");
+  ChildOptions options;
+  options.listen_socket = socket;
+  ChildProcess child(Shell("echo $LISTEN_FDS $LISTEN_PID $$; readlink /proc/self/fd/3 | cut -c1-7"),
+                     options);
+  EXPECT_EQ(WaitForEnd(child), 0);
+  std::istringstream said(child.output());
+  std::string fds, listen_pid, pid, fd3;
+  said >> fds >> listen_pid >> pid >> fd3;
+  EXPECT_EQ(fds, "1");
+  EXPECT_EQ(listen_pid, pid) << child.output();
+  EXPECT_EQ(fd3, "socket:") << child.output();
+  EXPECT_EQ(ListeningAddress(socket).rfind("127.0.0.1:", 0), 0u);
+  close(socket);
+  EXPECT_THROW(OpenListeningSocket("127.0.0.1"), std::runtime_error);
+  EXPECT_THROW(OpenListeningSocket("not-an-address:80"), std::runtime_error);
 }
 
 TEST(ChildProcessTest, ExitStatusDoesNotWaitAndDescribesTheEnd) {

@@ -81,7 +81,7 @@ TEST(RigFileTest, EveryKindOfMistakeIsNamed) {
   const std::vector<std::string> unread = CheckRig(headless);
   EXPECT_TRUE(Mentions(unread,
                        "SHAPESENSE_SHAPE: nobody publishes it (read by controller on "
-                       "control, lcm-logger on operator)"))
+                       "control, monitor on operator, lcm-logger on operator)"))
       << Joined(unread);
   headless.hosts[2].programs.clear();  // and no logger: the voxels go unread
   EXPECT_TRUE(Mentions(CheckRig(headless),
@@ -175,11 +175,20 @@ TEST(RigFileTest, EveryHostsUnitsPassSystemdAnalyzeVerify) {
       ++units;
     }
   }
-  EXPECT_EQ(units, 5);
+  EXPECT_EQ(units, 6);
   const std::vector<UnitFile> camera = UnitsForHost(rig, "camera", SHAPESENSE_BIN_DIR);
   EXPECT_NE(camera[0].text.find("CPUSchedulingPriority=20"), std::string::npos);
   const std::vector<UnitFile> operator_units = UnitsForHost(rig, "operator", SHAPESENSE_BIN_DIR);
   EXPECT_NE(operator_units[0].text.find("Type=simple"), std::string::npos) << "lcm-logger";
+  // The web monitor: the rig file's programs expected, the shape service's config.
+  ASSERT_EQ(operator_units.size(), 2u);
+  const std::string& monitor = operator_units[1].text;
+  EXPECT_NE(monitor.find("Type=notify"), std::string::npos) << monitor;
+  EXPECT_NE(monitor.find("\"--rig\" \"" + fs::absolute(rig.path).string() + "\""),
+            std::string::npos)
+      << monitor;
+  EXPECT_NE(monitor.find("\"--shape-config\""), std::string::npos) << monitor;
+  EXPECT_NE(monitor.find("\"--http\" \"127.0.0.1:8080\""), std::string::npos) << monitor;
   EXPECT_THROW(UnitsForHost(rig, "nowhere", SHAPESENSE_BIN_DIR), std::invalid_argument);
   fs::remove_all(folder);
 }

@@ -173,6 +173,33 @@ TEST(DemoPlanTest, EveryProgramOnTheRigsUrlEachCamerasImagesLoggedOnItsPort) {
   }
 }
 
+// With a socket for it, the web monitor runs beside the services on that
+// socket (made by the demo in the host's network), the shape projected
+// through the demo's rig; without one, there is none.
+TEST(DemoPlanTest, TheWebMonitorServesTheSocketItIsGiven) {
+  std::mt19937 random(17);
+  DemoSettings settings = RandomSettings(random, DemoCameras::kGigE);
+  EXPECT_THROW(Find(MakeDemoPlan(settings).pipeline, "monitor"), std::runtime_error);
+  settings.monitor_socket = 7;
+  settings.shape_config = "/tmp/shape.yaml";
+  const DemoPlan plan = MakeDemoPlan(settings);
+  const ProgramSpec& monitor = Find(plan.pipeline, "monitor");
+  EXPECT_EQ(monitor.listen_socket, 7);
+  EXPECT_EQ(ValueOf(monitor.argv, "--calibration"), plan.rig.string());
+  EXPECT_EQ(ValueOf(monitor.argv, "--shape-config"), "/tmp/shape.yaml");
+  EXPECT_EQ(ValueOf(monitor.argv, "--lcm-url"), settings.lcm_url);
+  EXPECT_FALSE(Has(monitor.argv, "--http")) << "it serves the socket it is given";
+  EXPECT_GT(monitor.nice, 0) << "a view yields to the pipeline";
+  const std::vector<std::string> names = Names(plan.pipeline);
+  EXPECT_LT(std::find(names.begin(), names.end(), "monitor") - names.begin(),
+            std::find(names.begin(), names.end(), "capture") - names.begin());
+  for (const ProgramSpec& other : plan.pipeline) {
+    if (other.name != "monitor") {
+      EXPECT_EQ(other.listen_socket, -1) << other.name;
+    }
+  }
+}
+
 // The closed-loop experiment's plan: the rig-sim serves the plant, the shape
 // service senses q, the logger leaves the images out, and each controller
 // run is on the same network with its logs apart.
