@@ -16,6 +16,7 @@ using nlohmann::json;
 constexpr double kFrustumDepthMm = 150.0;
 constexpr size_t kLatencyWindow = 300;
 constexpr int64_t kRateWindowUs = 2'000'000;
+constexpr int64_t kControllerPeriodUs = 50'000;  // 20 Hz: more than a person reads
 
 // Two decimals: what a view needs, and a third of the JSON.
 double Rounded(double value) { return std::round(value * 100.0) / 100.0; }
@@ -370,14 +371,28 @@ std::vector<WebUpdate> MonitorModel::OnTarget(const configuration_target_t& targ
           ControllerUpdate()};
 }
 
+// The controller's loop publishes at its own rate (100 Hz): at most one
+// update per kControllerPeriodUs, except when its mode or gate changes, and
+// Tick sends the latest.
 std::vector<WebUpdate> MonitorModel::OnTendonCommand(const tendon_command_t& command) {
+  const bool changed = !command_ || command_->mode != command.mode ||
+                       command_->gate_reasons != command.gate_reasons;
   command_ = command;
+  return ControllerIfDue(command.header.utime, changed);
+}
+
+std::vector<WebUpdate> MonitorModel::ControllerIfDue(int64_t utime, bool changed) {
+  if (!changed && utime - controller_sent_utime_ < kControllerPeriodUs &&
+      utime >= controller_sent_utime_) {
+    return {};
+  }
+  controller_sent_utime_ = utime;
   return {ControllerUpdate()};
 }
 
 std::vector<WebUpdate> MonitorModel::OnTendonState(const tendon_state_t& state) {
   state_ = state;
-  return {ControllerUpdate()};
+  return ControllerIfDue(state.header.utime, false);
 }
 
 std::vector<WebUpdate> MonitorModel::OnEstop(const estop_t& estop) {
@@ -418,6 +433,7 @@ std::string MonitorModel::ControllerJson() const {
 std::vector<WebUpdate> MonitorModel::Tick(int64_t now_utime) {
   json health = json::parse(board_.Json(now_utime));
   std::vector<WebUpdate> updates;
+  if (command_ || state_) updates.push_back(ControllerUpdate());
   updates.push_back(
       Text("health", {{"type", "health"}, {"now_utime", now_utime}, {"rows", health["programs"]}},
            now_utime));

@@ -120,6 +120,7 @@ class MonitorModel {
   void Count(const shape_t& shape, int64_t receive_utime);
   std::string ControllerJson() const;
   WebUpdate ControllerUpdate() const;
+  std::vector<WebUpdate> ControllerIfDue(int64_t utime, bool changed);
   std::optional<Vec3> TargetTip() const;
 
   MonitorModelOptions options_;
@@ -133,6 +134,7 @@ class MonitorModel {
   std::optional<configuration_target_t> target_;
   std::optional<estop_t> estop_;
   std::optional<shape_t> last_shape_;
+  int64_t controller_sent_utime_ = 0;
   int64_t frames_shown_ = 0;
 };
 

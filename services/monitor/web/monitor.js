@@ -883,9 +883,11 @@
       if (view) view.frame();
       if (plots) {
         // The time axis rolls, so plots redraw a few times a second even without data.
+        // Without a GPU (software WebGL: the CPU the pipeline needs) 4 a second at most.
+        const least = view && view.software ? 250 : 100;
         const due = t - lastPlotDraw > 250;
         const changed = plots.all.some((p) => p.dirty);
-        if (due || (changed && t - lastPlotDraw > 100)) {
+        if (due || (changed && t - lastPlotDraw > least)) {
           const now = nowS();
           for (const p of plots.all) p.draw(now);
           lastPlotDraw = t;

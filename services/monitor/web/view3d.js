@@ -150,9 +150,11 @@
       this.renderer = renderer;
       renderer.setPixelRatio(window.devicePixelRatio || 1);
       renderer.setClearColor(0x0b0e12, 1);
-      // Data-driven renders: every shape on a GPU, at most 10 per second in software.
+      // Data-driven renders: every shape on a GPU, at most 4 per second in software.
       this.rendererName = rendererName(renderer.getContext()) || probed;
-      this.minIntervalMs = this.software ? 100 : 0;
+      // (On a 2-core machine without a GPU, the browser shares the CPU with the
+      // pipeline it watches: 4 renders a second leave it most of the machine.)
+      this.minIntervalMs = this.software ? 250 : 0;
       this.lastRender = -Infinity;
       this.canvas.addEventListener('webglcontextlost', (event) => {
         event.preventDefault();

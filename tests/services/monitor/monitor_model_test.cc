@@ -189,6 +189,23 @@ TEST_F(MonitorModelTest, TheGateIsSaidInOneWord) {
   }
 }
 
+TEST_F(MonitorModelTest, TheControllersLoopRateIsThinnedButAChangeGoesOutAtOnce) {
+  tendon_command_t command{};
+  command.mode = tendon_command_t::MODE_CLOSED_LOOP;
+  int sent = 0;
+  for (int64_t step = 0; step < 100; ++step) {  // 1 s at 100 Hz
+    command.header.utime = kStart + step * 10'000;
+    sent += static_cast<int>(model_.OnTendonCommand(command).size());
+  }
+  EXPECT_EQ(sent, 20);
+  command.header.utime += 1'000;
+  command.gate_reasons = static_cast<int32_t>(kGateEmergencyStop);
+  const std::vector<WebUpdate> updates = model_.OnTendonCommand(command);
+  ASSERT_EQ(updates.size(), 1u);
+  EXPECT_EQ(json::parse(updates[0].payload)["gate"], "estop");
+  EXPECT_EQ(Find(model_.Tick(command.header.utime + 1'000), "controller")["gate"], "estop");
+}
+
 TEST(MonitorModelTargetTest, AConfigurationTargetIsDrawnFromTheModel) {
   TargetGeometry geometry;
   geometry.rest = {100.0, 60.0};
