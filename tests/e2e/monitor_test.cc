@@ -17,6 +17,7 @@
 // clang-format on
 #include <signal.h>
 
+#include <algorithm>
 #include <chrono>
 #include <fstream>
 #include <map>
@@ -60,6 +61,19 @@ struct FoxgloveSession {
   std::map<std::string, json> first;     // topic → its first message
 };
 
+// The topics a sensing pipeline without a controller publishes on.
+const std::vector<std::string> kLiveTopics = {"/shapesense/shape",       "/shapesense/truth",
+                                              "/shapesense/health",      "/shapesense/stats",
+                                              "/camera/cam0/compressed", "/camera/cam1/compressed",
+                                              "/camera/cam2/compressed"};
+
+bool HasAll(const std::map<std::string, json>& first) {
+  return std::all_of(kLiveTopics.begin(), kLiveTopics.end(),
+                     [&](const std::string& topic) { return first.count(topic) > 0; });
+}
+
+// Subscribes to every topic advertised; returns once each of kLiveTopics
+// has had a message, or at the timeout.
 FoxgloveSession ListenAsFoxglove(const std::string& url, seconds timeout) {
   asio::io_context io;
   websocket::stream<beast::tcp_stream> ws(io);
@@ -71,8 +85,7 @@ FoxgloveSession ListenAsFoxglove(const std::string& url, seconds timeout) {
   FoxgloveSession session;
   std::map<uint32_t, std::string> topic_of_subscription;
   const auto deadline = std::chrono::steady_clock::now() + timeout;
-  while (std::chrono::steady_clock::now() < deadline &&
-         (session.channels.empty() || session.first.size() < session.channels.size())) {
+  while (std::chrono::steady_clock::now() < deadline && !HasAll(session.first)) {
     beast::flat_buffer buffer;
     ws.next_layer().expires_at(deadline);
     ws.read(buffer);
@@ -156,9 +169,10 @@ TEST_F(MonitorTest, FoxgloveAndABrowserSeeTheLivePipelineAndAKilledServiceGoesMi
                                            milliseconds(60000)));
 
   const FoxgloveSession fox = ListenAsFoxglove(url, seconds(30));
-  for (const char* topic :
-       {"/shapesense/shape", "/shapesense/health", "/shapesense/stats", "/camera/cam0/compressed",
-        "/camera/cam1/compressed", "/camera/cam2/compressed"}) {
+  for (const char* topic : {"/shapesense/controller", "/shapesense/target"}) {
+    EXPECT_TRUE(fox.channels.count(topic)) << topic << " not advertised";
+  }
+  for (const std::string& topic : kLiveTopics) {
     ASSERT_TRUE(fox.channels.count(topic)) << topic << " not advertised";
     EXPECT_EQ(fox.channels.at(topic)["encoding"], "json");
     EXPECT_EQ(fox.channels.at(topic)["schemaEncoding"], "jsonschema");
