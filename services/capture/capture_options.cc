@@ -48,7 +48,7 @@ std::string BackgroundOptions::Validate() const {
 }
 
 std::string CaptureServiceOptions::Validate() const {
-  if (const std::string error = ValidateCameras(cameras, rig); !error.empty()) return error;
+  if (std::string error = ValidateCameras(cameras, rig); !error.empty()) return error;
   if (!(trigger_rate_hz >= 0.1 && trigger_rate_hz <= 1000.0)) {
     return Expected("trigger_rate_hz", "0.1-1000 Hz", trigger_rate_hz);
   }

@@ -375,8 +375,8 @@ std::vector<WebUpdate> MonitorModel::OnTarget(const configuration_target_t& targ
 // update per kControllerPeriodUs, except when its mode or gate changes, and
 // Tick sends the latest.
 std::vector<WebUpdate> MonitorModel::OnTendonCommand(const tendon_command_t& command) {
-  const bool changed = !command_ || command_->mode != command.mode ||
-                       command_->gate_reasons != command.gate_reasons;
+  const bool changed =
+      !command_ || command_->mode != command.mode || command_->gate_reasons != command.gate_reasons;
   command_ = command;
   return ControllerIfDue(command.header.utime, changed);
 }

@@ -320,7 +320,7 @@ service_status_t RunMonitor(const MonitorArgs& args, const std::atomic<bool>& st
   model_options.estop_enabled = !setup.token.empty();
   model_options.started_utime = NowUtime();
   MonitorModel model(model_options, setup.cameras, setup.rig, setup.geometry);
-  const std::string hello = HelloJson(model_options, setup.cameras);
+  std::string hello = HelloJson(model_options, setup.cameras);
 
   WebServerOptions web_options;
   web_options.listen = args.http;

@@ -201,7 +201,8 @@ class WebSocketSession : public std::enable_shared_from_this<WebSocketSession> {
     if (foxglove_) --server_.counts().foxglove_clients;
   }
 
-  void Run(http::request<http::string_body> request) {
+  // (Beast reads the request during the call alone, as its examples rely on.)
+  void Run(const http::request<http::string_body>& request) {
     ws_.set_option(websocket::stream_base::timeout::suggested(beast::role_type::server));
     if (foxglove_) {
       ws_.set_option(websocket::stream_base::decorator([](websocket::response_type& response) {
@@ -428,21 +429,20 @@ class HttpSession : public std::enable_shared_from_this<HttpSession> {
                     false);
     }
     http::request<http::string_body> request = parser_->release();
-    if (websocket::is_upgrade(request)) return Upgrade(std::move(request));
+    if (websocket::is_upgrade(request)) return Upgrade(request);
     Answer(Respond(request), request.keep_alive());
   }
 
-  void Upgrade(http::request<http::string_body> request) {
+  void Upgrade(const http::request<http::string_body>& request) {
     if (request.target() != "/ws") {
       ++server_.counts().bad_requests;
       return Answer(Plain(http::status::not_found, "WebSocket only at /ws\n"), false);
     }
-    const bool foxglove =
-        std::string(request[http::field::sec_websocket_protocol]).find(kFoxgloveSubprotocol) !=
-        std::string::npos;
+    const bool foxglove = std::string{request[http::field::sec_websocket_protocol]}.find(
+                              kFoxgloveSubprotocol) != std::string::npos;
     stream_.expires_never();
     std::make_shared<WebSocketSession>(stream_.release_socket(), server_, slot_, foxglove)
-        ->Run(std::move(request));
+        ->Run(request);
   }
 
   http::response<http::string_body> Respond(const http::request<http::string_body>& request) {
@@ -451,7 +451,7 @@ class HttpSession : public std::enable_shared_from_this<HttpSession> {
       return Plain(http::status::method_not_allowed, "only GET and HEAD\n");
     }
     const std::filesystem::path file =
-        StaticFileFor(server_.options().folders, std::string(request.target()));
+        StaticFileFor(server_.options().folders, std::string{request.target()});
     if (file.empty()) {
       ++server_.counts().bad_requests;
       return Plain(http::status::not_found, "not found\n");

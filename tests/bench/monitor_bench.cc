@@ -171,15 +171,7 @@ void Print(const std::string& name, const RunResult& result) {
   std::fflush(stdout);
 }
 
-}  // namespace
-}  // namespace shapesense::bench
-
-int main(int argc, char** argv) {
-  using namespace shapesense;
-  using namespace shapesense::bench;
-  // First, while this process has one thread.
-  const NetworkChoice network = EnterNetwork(NetworkMode::kPrivate, 8);
-  (void)network;
+int RunBench(int argc, char** argv) {
   CLI::App app{"monitor_bench: what the web monitor costs the live pipeline"};
   BenchOptions options;
   app.add_option("--seconds", options.seconds, "measured seconds per run")->capture_default_str();
@@ -203,4 +195,13 @@ int main(int argc, char** argv) {
   Print("monitor, " + clients + " Chromium pages (nice 19)",
         Run(options, "chromium_pages", true, Watchers::kChromium));
   return 0;
+}
+
+}  // namespace
+}  // namespace shapesense::bench
+
+int main(int argc, char** argv) {
+  // First, while this process has one thread.
+  shapesense::EnterNetwork(shapesense::NetworkMode::kPrivate, 8);
+  return shapesense::bench::RunBench(argc, argv);
 }

@@ -129,7 +129,7 @@ json PressEstop(const std::string& url, const std::string& token) {
     beast::flat_buffer buffer;
     ws.read(buffer);
     if (!ws.got_text()) continue;
-    const json message = json::parse(beast::buffers_to_string(buffer.data()));
+    json message = json::parse(beast::buffers_to_string(buffer.data()));
     if (message["type"] == "estop_result") return message;
   }
 }

@@ -17,7 +17,7 @@ namespace {
 namespace fs = std::filesystem;
 
 fs::path TokenFile(const std::string& text, mode_t mode) {
-  const fs::path path = fs::temp_directory_path() / ("estop_token_" + std::to_string(getpid()));
+  fs::path path = fs::temp_directory_path() / ("estop_token_" + std::to_string(getpid()));
   fs::remove(path);
   std::ofstream(path) << text;
   chmod(path.c_str(), mode);

@@ -173,12 +173,12 @@ TEST(WebServerTest, OversizedAndMalformedRequestsAreRefusedAndServingGoesOn) {
   WebServer server(
       Options(site), [] { return "hello"; }, [](const std::string&) { return ""; });
   const std::string huge_header =
-      "GET / HTTP/1.1\r\nHost: x\r\nX-Big: " + std::string(64 * 1024, 'a') +
+      "GET / HTTP/1.1\r\nHost: x\r\nX-Big: " + std::string(size_t{64} * 1024, 'a') +
       "\r\nConnection: close\r\n\r\n";
   EXPECT_EQ(RawExchange(server, huge_header).find("200 OK"), std::string::npos);
   EXPECT_TRUE(WaitUntil([&] { return server.Counters().bad_requests == 1; }));
   const std::string huge_body = "POST / HTTP/1.1\r\nHost: x\r\nContent-Length: 10000000\r\n\r\n" +
-                                std::string(100 * 1024, 'b');
+                                std::string(size_t{100} * 1024, 'b');
   EXPECT_EQ(RawExchange(server, huge_body).find("200 OK"), std::string::npos);
   EXPECT_TRUE(WaitUntil([&] { return server.Counters().bad_requests == 2; }));
   EXPECT_NE(RawExchange(server, "NOT HTTP AT ALL\r\n\r\n").find("400"), std::string::npos);
@@ -210,7 +210,7 @@ TEST(WebServerTest, ASlowClientGetsOnlyTheLatestAndDelaysNoOther) {
   Client quick(server);
   ASSERT_EQ(slow.Read(), "hello");
   ASSERT_EQ(quick.Read(), "hello");
-  const std::string big(256 * 1024, 'x');  // fills the slow client's socket buffers at once
+  const std::string big(size_t{256} * 1024, 'x');  // fills the slow client's socket buffers at once
   constexpr int kMessages = 400;
   for (int i = 0; i < kMessages; ++i) {
     server.Publish("shape", Text(std::to_string(i) + ":" + big));
