@@ -17,6 +17,7 @@ constexpr double kFrustumDepthMm = 150.0;
 constexpr size_t kLatencyWindow = 300;
 constexpr int64_t kRateWindowUs = 2'000'000;
 constexpr int64_t kControllerPeriodUs = 50'000;  // 20 Hz: more than a person reads
+constexpr int64_t kVoxelPeriodUs = 250'000;      // 4 Hz
 
 // Two decimals: what a view needs, and a third of the JSON.
 double Rounded(double value) { return std::round(value * 100.0) / 100.0; }
@@ -245,6 +246,32 @@ std::vector<WebUpdate> MonitorModel::OnSilhouettes(const silhouettes_t& silhouet
   FrameSetOf(silhouettes.trigger_seq, silhouettes.trigger_utime).silhouettes = silhouettes;
   ForgetOldFrameSets();
   return {};
+}
+
+std::vector<WebUpdate> MonitorModel::OnVoxels(const voxel_cloud_t& cloud) {
+  const int64_t since = cloud.trigger_utime - voxels_sent_utime_;
+  if (since >= 0 && since < kVoxelPeriodUs) return {};
+  voxels_sent_utime_ = cloud.trigger_utime;
+  json points = json::array();
+  const int64_t nx = cloud.dims[0];
+  const int64_t ny = cloud.dims[1];
+  for (const int32_t index : cloud.voxels) {
+    const Vec3 cell(static_cast<double>(index % nx), static_cast<double>((index / nx) % ny),
+                    static_cast<double>(index / (nx * ny)));
+    const Vec3 centre = Vec3(cloud.grid_origin[0], cloud.grid_origin[1], cloud.grid_origin[2]) +
+                        cell * cloud.voxel_size;
+    for (int axis = 0; axis < 3; ++axis) {
+      points.push_back(std::round(centre[axis] * 10.0) / 10.0);
+    }
+  }
+  // The page's alone: Foxglove clients get the shapes, not the hull.
+  return {{"voxels",
+           json{{"type", "voxels"},
+                {"trigger_seq", cloud.trigger_seq},
+                {"voxel_size", cloud.voxel_size},
+                {"points", points}}
+               .dump(),
+           false, "", cloud.trigger_utime}};
 }
 
 std::vector<WebUpdate> MonitorModel::OnPreview(image_t preview) {

@@ -27,6 +27,7 @@
 #include "shapesense/silhouettes_t.hpp"
 #include "shapesense/tendon_command_t.hpp"
 #include "shapesense/tendon_state_t.hpp"
+#include "shapesense/voxel_cloud_t.hpp"
 
 namespace shapesense {
 
@@ -83,6 +84,9 @@ class MonitorModel {
   std::vector<WebUpdate> OnShape(const shape_t& shape, int64_t receive_utime);
   std::vector<WebUpdate> OnTruth(const shape_t& truth);
   std::vector<WebUpdate> OnSilhouettes(const silhouettes_t& silhouettes, int64_t receive_utime);
+  // The visual hull, at most every kVoxelPeriodUs of trigger time: the
+  // largest message, and a person sees no more.
+  std::vector<WebUpdate> OnVoxels(const voxel_cloud_t& cloud);
   // A camera's preview (image_t, JPEG).
   std::vector<WebUpdate> OnPreview(image_t preview);
   std::vector<WebUpdate> OnStatus(const service_status_t& status, int64_t receive_utime);
@@ -135,6 +139,7 @@ class MonitorModel {
   std::optional<estop_t> estop_;
   std::optional<shape_t> last_shape_;
   int64_t controller_sent_utime_ = 0;
+  int64_t voxels_sent_utime_ = 0;
   int64_t frames_shown_ = 0;
 };
 

@@ -19,6 +19,7 @@
 #include "runtime/lcm/service_loop.h"
 #include "runtime/lcm/service_status.h"
 #include "runtime/lcm/shape_message.h"
+#include "runtime/lcm/voxel_cloud_message.h"
 #include "runtime/process/systemd_notify.h"
 #include "runtime/rig/rig_file.h"
 #include "services/monitor/monitor_model.h"
@@ -111,6 +112,12 @@ class MonitorService {
                       [this](const silhouettes_t& set, int64_t received) {
                         return model_.OnSilhouettes(set, received);
                       });
+    On<voxel_cloud_t>(bus, channels::kVoxels, [this](const voxel_cloud_t& cloud, int64_t) {
+      if (const std::string why = ValidateVoxelCloudMessage(cloud); !why.empty()) {
+        throw Malformed(why);
+      }
+      return model_.OnVoxels(cloud);
+    });
     On<image_t>(bus, channels::kPreviewPattern, [this](image_t& preview, int64_t) {
       if (const std::string why = PreviewProblem(preview); !why.empty()) throw Malformed(why);
       return model_.OnPreview(std::move(preview));

@@ -282,6 +282,15 @@
       if (view) view.setTruth(truth);
       dirty.info = true;
     },
+    voxels(m) {
+      const points = m.points;
+      if (!Array.isArray(points) || points.length % 3 !== 0 || !points.every(Number.isFinite) ||
+          !(Number.isFinite(m.voxel_size) && m.voxel_size > 0)) {
+        throw bad('voxels: points must be finite x, y, z triples and voxel_size positive');
+      }
+      api.latest.voxels = { trigger_seq: m.trigger_seq, count: points.length / 3 };
+      if (view) view.setVoxels({ points, voxel_size: m.voxel_size });
+    },
     target(m) {
       const target = validateTarget(m);
       api.latest.target = target;
@@ -996,7 +1005,7 @@
         for (const p of panes.values()) p.dirty = true;
       });
     }
-    for (const name of ['target', 'truth', 'markers', 'frusta']) {
+    for (const name of ['target', 'truth', 'markers', 'frusta', 'voxels']) {
       const box = $('layer3d-' + name);
       if (view) view.setLayer(name, box.checked);
       box.addEventListener('change', () => view && view.setLayer(name, box.checked));

@@ -106,8 +106,8 @@
       this.failure = '';
       this.dirty = true;
       this.renders = 0;
-      this.layers = { target: true, truth: false, markers: true, frusta: true };
-      this.pending = { shape: null, target: undefined, truth: null, cameras: null };
+      this.layers = { target: true, truth: false, markers: true, frusta: true, voxels: false };
+      this.pending = { shape: null, target: undefined, truth: null, cameras: null, voxels: null };
       this.fittedToShape = false;
       this.fittedToCameras = false;
       this.frustumPoints = [];
@@ -208,6 +208,12 @@
       this.truth.visible = false;
       scene.add(this.truth);
 
+      // The visual hull: one point per occupied voxel, its edge long.
+      this.voxels = new THREE.Points(new THREE.BufferGeometry(),
+        new THREE.PointsMaterial({ color: 0x7d8a99, size: 1, sizeAttenuation: true, transparent: true, opacity: 0.55 }));
+      this.voxels.visible = false;
+      scene.add(this.voxels);
+
       this.markerGeometry = new THREE.SphereBufferGeometry(3.2, 12, 8);
       this.markerMaterial = new THREE.MeshStandardMaterial({ color: COLORS.marker, emissive: 0x004a52 });
       this.markers = new THREE.Group();
@@ -225,6 +231,7 @@
     // Latest data; built on the next frame().
     setShape(shape) { this.pending.shape = shape; this.dirty = true; }
     setTruth(truth) { this.pending.truth = truth; this.dirty = true; }
+    setVoxels(voxels) { this.pending.voxels = voxels; this.dirty = true; }
     setTarget(target) { this.pending.target = target; this.dirty = true; }
     setCameras(cameras) { this.pending.cameras = cameras; this.dirty = true; }
     setLayer(name, on) {
@@ -238,6 +245,7 @@
       this.markers.visible = this.layers.markers;
       this.frusta.visible = this.layers.frusta;
       this.truth.visible = this.layers.truth && this.truthHasData === true;
+      this.voxels.visible = this.layers.voxels && this.voxelsHaveData === true;
       this.target.visible = this.layers.target && this.targetHasTube === true;
       this.targetTip.visible = this.layers.target && this.targetHasTip === true;
     }
@@ -313,6 +321,17 @@
         this.targetTip.position.set(target.tip[0], target.tip[1], target.tip[2]);
         this.targetHasTip = true;
       }
+    }
+
+    buildVoxels(voxels) {
+      this.voxelsHaveData = false;
+      if (!voxels || voxels.points.length < 3) return;
+      const geometry = new THREE.BufferGeometry();
+      setAttr(geometry, 'position', new THREE.BufferAttribute(Float32Array.from(voxels.points), 3));
+      this.voxels.geometry.dispose();
+      this.voxels.geometry = geometry;
+      this.voxels.material.size = voxels.voxel_size;
+      this.voxelsHaveData = true;
     }
 
     buildTruth(truth) {
@@ -426,6 +445,7 @@
       if (p.cameras) { this.buildCameras(p.cameras); p.cameras = null; }
       if (p.target !== undefined) { this.buildTarget(p.target); p.target = undefined; }
       if (p.truth) { this.buildTruth(p.truth); p.truth = null; }
+      if (p.voxels) { this.buildVoxels(p.voxels); p.voxels = null; }
       if (p.shape) { this.buildShape(p.shape); p.shape = null; }
       if (!this.dirty || this.size[0] < 2 || this.size[1] < 2) return false;
       this.applyLayers();

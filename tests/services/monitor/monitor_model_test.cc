@@ -206,6 +206,34 @@ TEST_F(MonitorModelTest, TheControllersLoopRateIsThinnedButAChangeGoesOutAtOnce)
   EXPECT_EQ(Find(model_.Tick(command.header.utime + 1'000), "controller")["gate"], "estop");
 }
 
+TEST_F(MonitorModelTest, TheHullGoesOutAFewTimesASecondAsVoxelCentres) {
+  voxel_cloud_t cloud{};
+  cloud.grid_origin[0] = -10.0;
+  cloud.grid_origin[1] = 20.0;
+  cloud.grid_origin[2] = 5.0;
+  cloud.voxel_size = 0.5;
+  cloud.dims[0] = 4;
+  cloud.dims[1] = 3;
+  cloud.dims[2] = 2;
+  cloud.voxels = {0, 1 + 4 * (2 + 3 * 1)};  // (0, 0, 0) and (1, 2, 1)
+  cloud.labels = {0, 0};
+  cloud.num_voxels = 2;
+  int sent = 0;
+  for (int64_t seq = 0; seq < 30; ++seq) {  // 1 s at 30 Hz
+    cloud.trigger_seq = seq;
+    cloud.trigger_utime = kStart + seq * kPeriodUs;
+    const std::vector<WebUpdate> updates = model_.OnVoxels(cloud);
+    sent += static_cast<int>(updates.size());
+    if (seq == 0) {
+      ASSERT_EQ(updates.size(), 1u);
+      EXPECT_TRUE(updates[0].foxglove_channel.empty());
+      EXPECT_EQ(json::parse(updates[0].payload)["points"],
+                json::parse("[-10.0, 20.0, 5.0, -9.5, 21.0, 5.5]"));
+    }
+  }
+  EXPECT_EQ(sent, 4);
+}
+
 TEST(MonitorModelTargetTest, AConfigurationTargetIsDrawnFromTheModel) {
   TargetGeometry geometry;
   geometry.rest = {100.0, 60.0};
