@@ -6,6 +6,7 @@
 
 #include "libs/control/safety_gate.h"
 #include "libs/core/error.h"
+#include "runtime/lcm/tendon_message.h"
 #include "shapesense/tendon_command_t.hpp"
 
 namespace shapesense {
@@ -52,21 +53,6 @@ std::string CsvText(std::string text) {
 }
 
 }  // namespace
-
-const char* CommandModeName(int8_t mode) {
-  switch (mode) {
-    case tendon_command_t::MODE_OPEN_LOOP:
-      return "open_loop";
-    case tendon_command_t::MODE_CLOSED_LOOP:
-      return "closed_loop";
-    case tendon_command_t::MODE_MODEL_LESS:
-      return "model_less";
-    case tendon_command_t::MODE_STOP:
-      return "stop";
-    default:
-      return "hold";
-  }
-}
 
 std::vector<std::string> ControllerLogColumns(int tendons) {
   std::vector<std::string> columns = {"time_s", "utime", "mode", "sent"};

@@ -38,9 +38,6 @@ struct StepRecord {
   std::string note;          // what happened at this step (a rejected target, a stop, ...)
 };
 
-// "hold", "open_loop", "closed_loop", "model_less", "stop".
-const char* CommandModeName(int8_t mode);
-
 class ControllerLog {
  public:
   // Opens both logs (creating their folders) and writes the CSV header; an

@@ -7,6 +7,7 @@
 
 #include "libs/control/safety_gate.h"
 #include "libs/mechanics/configuration_geometry.h"
+#include "runtime/lcm/tendon_message.h"
 
 namespace shapesense {
 namespace {
@@ -84,23 +85,6 @@ json ShapeJson(const char* type, const shape_t& shape, double latency_ms) {
           {"residual_mm", Rounded(shape.centerline_residual_mm)},
           {"stages", stages},
           {"latency_ms", Rounded(latency_ms)}};
-}
-
-const char* ModeName(int8_t mode) {
-  switch (mode) {
-    case tendon_command_t::MODE_HOLD:
-      return "hold";
-    case tendon_command_t::MODE_OPEN_LOOP:
-      return "open_loop";
-    case tendon_command_t::MODE_CLOSED_LOOP:
-      return "closed_loop";
-    case tendon_command_t::MODE_MODEL_LESS:
-      return "model_less";
-    case tendon_command_t::MODE_STOP:
-      return "stop";
-    default:
-      return "unknown";
-  }
 }
 
 // The gate in one word: what an operator must know first.
@@ -443,7 +427,7 @@ std::string MonitorModel::ControllerJson() const {
   const uint32_t reasons = command_ ? static_cast<uint32_t>(command_->gate_reasons) : 0;
   json value = {{"type", "controller"},
                 {"utime", command_ ? command_->header.utime : 0},
-                {"mode", command_ ? ModeName(command_->mode) : "none"},
+                {"mode", command_ ? CommandModeName(command_->mode) : "none"},
                 {"gate", command_ ? GateState(reasons) : "none"},
                 {"gate_reasons", SplitReasons(reasons)},
                 {"commanded_mm", command_ ? command_->displacement_mm : std::vector<double>{}},

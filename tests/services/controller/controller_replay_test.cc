@@ -34,6 +34,7 @@ using std::chrono::milliseconds;
 using testing::InProcessRig;
 
 constexpr const char* kUrl = "udpm://239.255.79.3:7931?ttl=0";
+constexpr const char* kLoggerUrl = "udpm://239.255.79.3:7931?ttl=0&recv_buf_size=4194304";
 constexpr int kTargetStep = 25;
 constexpr int kSteps = 400;
 
@@ -178,7 +179,10 @@ int64_t ReplayableMessages(const fs::path& log) {
 TEST_F(ControllerReplayTest, ARecordedRunPlayedIntoALiveControllerIsRejectedAndChangesNoCommand) {
   // A run towards one target, recorded.
   const fs::path log = dir_ / "recorded.lcmlog";
-  auto logger = Start({"/usr/bin/lcm-logger", "--lcm-url=" + std::string(kUrl),
+  // The in-process rig runs as fast as it can: the whole run (~0.6 MB) must
+  // fit the logger's socket buffer, or a logger the machine's load keeps
+  // off the CPU for a moment drops what the run sent meanwhile.
+  auto logger = Start({"/usr/bin/lcm-logger", "--lcm-url=" + std::string(kLoggerUrl),
                        "--flush-interval=50", "--force", log.string()});
   WaitUntilLogging(log);
   Run("recorded", Target(0.004, 0.0));
