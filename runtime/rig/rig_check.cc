@@ -200,9 +200,11 @@ ProgramChannels ChannelsOf(const std::string& program, const std::vector<std::st
   if (program == "lcm-logger") return {{}, {}, true};
   if (program == "rig-status") return {{}, {ch::kShape}};
   if (program == "monitor") {
+    // What it needs; the compact silhouettes and the voxels it shows when
+    // they travel on its network (a rig may keep them on the camera host).
     std::vector<std::string> reads = PerCamera(&ch::Preview, cameras);
-    reads.insert(reads.end(), {ch::kShape, ch::kSilhouettes, ch::kTarget, ch::kTendonCommand,
-                               ch::kTendonState, ch::kEstop, ch::kTruth});
+    reads.insert(reads.end(), {ch::kShape, ch::kTarget, ch::kTendonCommand, ch::kTendonState,
+                               ch::kEstop, ch::kTruth});
     return {{ch::kEstop}, reads};
   }
   return {};
