@@ -162,6 +162,30 @@ void WaitUntilLogging(const fs::path& log) {
   FAIL() << "lcm-logger wrote nothing to " << log << " within 10 s";
 }
 
+bool LogHasChannel(const fs::path& log, const std::string& channel) {
+  lcm::LogFile file(log.string(), "r");
+  if (!file.good()) return false;
+  for (const lcm::LogEvent* event = file.readNextEvent(); event != nullptr;
+       event = file.readNextEvent()) {
+    if (event->channel == channel) return true;
+  }
+  return false;
+}
+
+// Publishes an end marker until lcm-logger has written it: everything sent
+// before it on the group has then been read and written too (one socket
+// receives in order), so stopping the logger loses nothing of the run.
+void WaitUntilLogged(const fs::path& log) {
+  LcmBus probe(kUrl);
+  tendon_state_t marker{};
+  for (int i = 0; i < 200; ++i) {
+    probe.Publish("TEST_LOGGER_END", marker);
+    std::this_thread::sleep_for(milliseconds(50));
+    if (LogHasChannel(log, "TEST_LOGGER_END")) return;
+  }
+  FAIL() << "lcm-logger did not write the end marker to " << log << " within 10 s";
+}
+
 // Signed messages of the log on the channels the rig's controller and plant verify.
 int64_t ReplayableMessages(const fs::path& log) {
   lcm::LogFile file(log.string(), "r");
@@ -186,6 +210,7 @@ TEST_F(ControllerReplayTest, ARecordedRunPlayedIntoALiveControllerIsRejectedAndC
                        "--flush-interval=50", "--force", log.string()});
   WaitUntilLogging(log);
   Run("recorded", Target(0.004, 0.0));
+  WaitUntilLogged(log);
   logger->Stop(SIGINT, milliseconds(5000));
   const int64_t replayable = ReplayableMessages(log);
   ASSERT_GT(replayable, kSteps) << "the recording holds the run's shapes, states and commands";
