@@ -1,5 +1,8 @@
 #include "services/capture/preview_publisher.h"
 
+#include <pthread.h>
+#include <sched.h>
+
 #include <cmath>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
@@ -86,6 +89,11 @@ void PreviewPublisher::Offer(const std::string& camera, const CameraFrame& frame
 }
 
 void PreviewPublisher::Run() {
+  // Pictures for people take only CPU nobody else wants: the capture
+  // service may run at a raised priority (its triggers stand for hardware),
+  // and an encode at that priority delayed the virtual rig's exposures.
+  const sched_param idle{};
+  pthread_setschedparam(pthread_self(), SCHED_IDLE, &idle);
   while (!stopping_) {
     std::optional<Job> job = queue_.Pop(kPopTimeout);
     if (!job) continue;

@@ -7,8 +7,9 @@
 //
 // Which frames: every n-th trigger sequence, the same for every camera (so
 // the previews of one instant form a set the monitor can overlay with that
-// frame-set's silhouettes and shape). Encoded on a thread of its own behind
-// a drop-oldest queue, so a preview never delays an image of the pipeline.
+// frame-set's silhouettes and shape). Encoded on a thread of its own at
+// SCHED_IDLE behind a drop-oldest queue, so a preview never delays an image
+// of the pipeline: on a machine the pipeline fills, previews are dropped.
 #include <atomic>
 #include <cstdint>
 #include <functional>
