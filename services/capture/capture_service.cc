@@ -78,9 +78,11 @@ class CaptureService {
         compression_(ParseCompression(args.options.compression)),
         log_(args.log ? args.log : LogToStderr),
         started_(static_cast<std::ptrdiff_t>(args.options.cameras.size())),
-        previews_(
-            options_.preview, options_.trigger_rate_hz,
-            [this](const std::string& channel, image_t& preview) { Publish(channel, preview); }) {}
+        preview_bus_(bus.options()),
+        previews_(options_.preview, options_.trigger_rate_hz,
+                  [this](const std::string& channel, image_t& preview) {
+                    preview_bus_.Publish(channel, preview);
+                  }) {}
 
   CaptureSummary Run(const std::atomic<bool>& stop);
 
@@ -128,6 +130,10 @@ class CaptureService {
   std::atomic<int64_t> triggers_{0};
   int64_t truth_seq_ = 0;
   int64_t stale_trigger_us_ = 0;
+  // The previews' own bus: their thread runs at SCHED_IDLE, and on the
+  // grab threads' bus it held the lock they publish under while the machine
+  // kept it off the CPU, delaying every camera's images behind it.
+  LcmBus preview_bus_;
   PreviewPublisher previews_;  // last: its thread publishes through the above
 };
 

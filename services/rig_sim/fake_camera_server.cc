@@ -256,14 +256,17 @@ void FakeCameraServer::WatchTriggers() {
 void FakeCameraServer::WatchTrigger(Slot& slot) {
   ArvFakeCamera* fake =
       slot.gv_camera != nullptr ? arv_gv_fake_camera_get_fake_camera(slot.gv_camera) : nullptr;
-  // The trigger register first, then the acquisition status: a trigger seen
-  // waiting while the camera still did not acquire was written before the
-  // start. Read the other way round, a start and its first trigger that both
-  // land between the two reads (this thread preempted on a busy machine)
-  // made that trigger look older than the start, and it was forgotten.
-  const bool waiting = fake != nullptr && TriggerWaiting(fake);
-  const bool acquiring = fake != nullptr && arv_fake_camera_get_acquisition_status(fake) != 0;
-  if (fake != nullptr && !acquiring) slot.trigger_before_start = waiting;
+  bool acquiring = fake != nullptr && arv_fake_camera_get_acquisition_status(fake) != 0;
+  if (fake != nullptr && !acquiring) {
+    // The trigger register, then the status again: a trigger waiting while
+    // the camera still did not acquire was written before the start. With
+    // one read of the status before the trigger's, a start and its first
+    // trigger that both landed in between (this thread preempted on a busy
+    // machine) made that trigger look older than the start: forgotten.
+    const bool waiting = TriggerWaiting(fake);
+    acquiring = arv_fake_camera_get_acquisition_status(fake) != 0;
+    if (!acquiring) slot.trigger_before_start = waiting;
+  }
   if (acquiring && !slot.acquiring && slot.trigger_before_start) {
     ForgetEarlierTriggers(slot, fake);
   }
