@@ -2,6 +2,7 @@
 
 #include <chrono>
 #include <cstdio>
+#include <functional>
 #include <stdexcept>
 #include <thread>
 
@@ -16,13 +17,24 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 constexpr auto kFrameTimeout = std::chrono::seconds(5);
+constexpr auto kRetriggerAfter = std::chrono::seconds(1);
 
-// Waits for the next frame, at most kFrameTimeout, in short grabs so that a stop is seen.
-cv::Mat NextFrame(CameraBackend& camera, const std::atomic<bool>& stop) {
+// Waits for the next frame, at most kFrameTimeout, in short grabs so that a
+// stop is seen. A software trigger that brought nothing within
+// kRetriggerAfter is sent again (`retrigger`): a trigger can be lost, as a
+// camera's first after its start can be, and every frame of a backdrop
+// shows the same, so a late second answer does no harm to the median.
+cv::Mat NextFrame(CameraBackend& camera, const std::function<void()>& retrigger,
+                  const std::atomic<bool>& stop) {
   const Clock::time_point deadline = Clock::now() + kFrameTimeout;
+  Clock::time_point next_retrigger = Clock::now() + kRetriggerAfter;
   CameraFrame frame;
   while (!stop && Clock::now() < deadline) {
     if (camera.Grab(std::chrono::milliseconds(100), &frame)) return frame.image;
+    if (retrigger && Clock::now() >= next_retrigger) {
+      retrigger();
+      next_retrigger += kRetriggerAfter;
+    }
   }
   if (stop) throw std::runtime_error("background: stopped before the end");
   throw CameraError(camera.name() + ": no frame for 5 s");
@@ -34,13 +46,15 @@ std::vector<cv::Mat> GrabFrames(CameraBackend& camera, const CameraConfig& confi
       std::chrono::duration<double>(1.0 / trigger_rate_hz));
   std::vector<cv::Mat> frames;
   Clock::time_point next = Clock::now();
+  const bool software = config.Trigger() == TriggerMode::kSoftware;
   for (int i = 0; i < count; ++i) {
-    if (config.Trigger() == TriggerMode::kSoftware) {
+    const auto trigger = [&camera, i] { camera.Trigger(i, NowUtime()); };
+    if (software) {
       std::this_thread::sleep_until(next);
       next += period;
-      camera.Trigger(i, NowUtime());
+      trigger();
     }
-    frames.push_back(NextFrame(camera, stop));
+    frames.push_back(NextFrame(camera, software ? std::function<void()>(trigger) : nullptr, stop));
   }
   return frames;
 }

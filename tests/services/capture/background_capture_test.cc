@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <array>
 #include <random>
+#include <thread>
 
 #include "libs/camera/rig_yaml.h"
 #include "libs/sim/tube_scene.h"
@@ -85,6 +86,60 @@ TEST(BackgroundCaptureTest, SimulatedCamerasShowTheBackdropAlone) {
     EXPECT_LT(mean_error, 1.5) << "noise averaged out, and no manipulator";
     EXPECT_LE(cv::norm(median, views[camera].background, cv::NORM_INF), 12.0);
   }
+}
+
+// A software-triggered camera that loses its first trigger (as a camera
+// just started can), then answers every trigger with a flat grey frame.
+class FirstTriggerLost : public CameraBackend {
+ public:
+  explicit FirstTriggerLost(std::string name) : name_(std::move(name)) {}
+  const std::string& name() const override { return name_; }
+  void Open() override { open_ = true; }
+  void Close() override { open_ = false; }
+  bool IsOpen() const override { return open_; }
+  void Trigger(int64_t seq, int64_t utime) override {
+    ++triggers_;
+    if (triggers_ > 1) pending_.push_back({seq, utime});
+  }
+  bool Grab(std::chrono::milliseconds timeout, CameraFrame* frame) override {
+    if (pending_.empty()) {
+      std::this_thread::sleep_for(std::min(timeout, std::chrono::milliseconds(20)));
+      return false;
+    }
+    frame->image = cv::Mat(8, 8, CV_8UC3, cv::Scalar(90, 90, 90));
+    frame->trigger_seq = pending_.front().first;
+    frame->trigger_utime = pending_.front().second;
+    pending_.erase(pending_.begin());
+    return true;
+  }
+  CameraStats Stats() const override { return {}; }
+
+ private:
+  std::string name_;
+  bool open_ = false;
+  int triggers_ = 0;
+  std::vector<std::pair<int64_t, int64_t>> pending_;
+};
+
+TEST(BackgroundCaptureTest, ALostTriggerIsSentAgain) {
+  TempDir dir("background_lost_trigger");
+  CaptureServiceOptions options;
+  CameraConfig camera = testing::ReplayConfig("cam0", (dir.path() / "unused").string());
+  camera.backend = "aravis";
+  camera.trigger = "software";
+  camera.width = 8;
+  camera.height = 8;
+  options.cameras = {camera};
+  options.background.frames = 3;
+  options.background.out = (dir.path() / "background").string();
+  BackgroundCaptureArgs args = QuietArgs(options);
+  args.make_backend = [](const CameraConfig& config, const BackendContext&) {
+    return std::make_unique<FirstTriggerLost>(config.name);
+  };
+  std::atomic<bool> stop{false};
+  const std::vector<fs::path> written = RunBackgroundCapture(args, stop);
+  ASSERT_EQ(written.size(), 1u);
+  EXPECT_EQ(ReadBgrImage(written[0]).at<cv::Vec3b>(4, 4), cv::Vec3b(90, 90, 90));
 }
 
 TEST(BackgroundCaptureTest, ACameraThatCannotOpenIsACameraError) {
