@@ -240,8 +240,11 @@ std::vector<WebUpdate> MonitorModel::OnVoxels(const voxel_cloud_t& cloud) {
   const int64_t nx = cloud.dims[0];
   const int64_t ny = cloud.dims[1];
   for (const int32_t index : cloud.voxels) {
-    const Vec3 cell(static_cast<double>(index % nx), static_cast<double>((index / nx) % ny),
-                    static_cast<double>(index / (nx * ny)));
+    // The cell's integer coordinates, from i = x + nx * (y + ny * z).
+    const int64_t x = index % nx;
+    const int64_t y = (index / nx) % ny;
+    const int64_t z = index / (nx * ny);
+    const Vec3 cell(static_cast<double>(x), static_cast<double>(y), static_cast<double>(z));
     const Vec3 centre = Vec3(cloud.grid_origin[0], cloud.grid_origin[1], cloud.grid_origin[2]) +
                         cell * cloud.voxel_size;
     for (int axis = 0; axis < 3; ++axis) {
