@@ -324,7 +324,6 @@ WebUpdate MonitorModel::CameraFrame(const image_t& preview, const FrameSet& set)
   for (int i = 0; i < 4; ++i) payload[i] = static_cast<char>((length >> (8 * i)) & 0xff);
   payload += text;
   payload.append(preview.data.begin(), preview.data.end());
-  ++frames_shown_;
   return {"camera/" + preview.camera, std::move(payload), true, "", preview.trigger_utime};
 }
 

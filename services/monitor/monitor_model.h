@@ -97,8 +97,6 @@ class MonitorModel {
   // The health table and the statistics (call a few times a second).
   std::vector<WebUpdate> Tick(int64_t now_utime);
 
-  int64_t frames_shown() const { return frames_shown_; }
-
  private:
   struct FrameSet {
     std::optional<shape_t> shape;
@@ -140,7 +138,6 @@ class MonitorModel {
   std::optional<shape_t> last_shape_;
   int64_t controller_sent_utime_ = 0;
   int64_t voxels_sent_utime_ = 0;
-  int64_t frames_shown_ = 0;
 };
 
 }  // namespace shapesense
