@@ -1,6 +1,11 @@
 #include "libs/centerline/markers.h"
 
 #include <algorithm>
+#include <cmath>
+#include <limits>
+#include <numbers>
+#include <optional>
+#include <utility>
 
 #include "libs/centerline/curve_measures.h"
 #include "libs/geometry/polyline.h"
@@ -15,141 +20,328 @@ struct Cluster {
 };
 
 MarkerOnCurve PlaceOnCurve(const Cluster& cluster, const Polyline& centerline,
-                           const std::vector<double>& arc) {
+                           const std::vector<double>& arc, double voxel_size) {
   const ClosestPoint closest = ClosestPointOnPolyline(centerline, arc, cluster.sum / cluster.count);
-  return {closest.arc_length, closest.point, cluster.count};
+  MarkerOnCurve marker;
+  marker.arc_length = closest.arc_length;
+  marker.point = closest.point;
+  marker.voxels = cluster.count;
+  marker.std_mm = voxel_size;
+  return marker;
 }
 
-// Steps along the centreline when reading labels, mm.
-constexpr double kLabelStep = 0.2;
-// Read this far beyond the band's expected ends, mm: room for the voxels'
-// error in its centre and the front-surface shift.
-constexpr double kLabelMargin = 8.0;
-// Half the widest band looked for, mm.
-constexpr double kMaxHalfWidth = 8.0;
+// Lines of the tube's surface read in each view, spread over ±kMaxLineAngle
+// about the one facing the camera: farther out the line nears the outline,
+// where a bilinear read would mix in the backdrop.
+constexpr int kLines = 7;
+constexpr double kMaxLineAngle = 0.25 * std::numbers::pi;
+// Along a line the pixels are projected exactly this far apart and
+// interpolated between (the image of a line on the tube is smooth on this
+// scale), mm.
+constexpr double kProjectStep = 1.0;
+// Labels are read this far apart along a line's image, px.
+constexpr double kReadStepPx = 0.35;
+// Without a configured width, bands of these widths are accepted, mm.
+constexpr double kMinUnknownWidth = 1.0;
+constexpr double kMaxUnknownWidth = 12.0;
+// A view needs this many lines that agree.
+constexpr int kMinLines = 3;
+// A line's edge is off by up to half a pixel (the labels are binary); the
+// centre averages two edges: about 0.2 px standard error.
+constexpr double kCentreQuantisationPx = 0.2;
+// Views of one band that differ by more than this many standard errors, and
+// by more than kMinDisagreement mm, saw different things.
+constexpr double kMaxNormalisedDisagreement = 4.0;
+constexpr double kMinDisagreement = 0.3;
 
-enum class Seen { kTape, kBody, kUnknown };
+// Where one band is looked for: arc lengths [first, last] about the seed.
+struct BandWindow {
+  double first = 0.0;
+  double last = 0.0;
+  double seed = 0.0;
+  double width = 0.0;  // configured, or 0
+};
 
-Seen LabelAt(const Camera& camera, const Silhouette& silhouette, const Vec2& pixel) {
-  if (!camera.InImage(pixel)) return Seen::kUnknown;
-  const int x = static_cast<int>(pixel.x() + 0.5);
-  const int y = static_cast<int>(pixel.y() + 0.5);
-  switch (silhouette.labels.at<uint8_t>(y, x)) {
-    case kLabelMarker:
-      return Seen::kTape;
-    case kLabelBody:
-      return Seen::kBody;
-    default:
-      return Seen::kUnknown;  // off the silhouette: the centreline is wrong here
+// One view's reading of a band.
+struct ViewBand {
+  double center = 0.0;
+  double width = 0.0;
+  double std = 0.0;
+};
+
+// A point of the tube's surface at arc s, `angle` round from the line that
+// faces the camera.
+Vec3 SurfacePoint(const Polyline& centerline, const std::vector<double>& arc, double s,
+                  double radius, const Vec3& camera_center, double angle) {
+  const Vec3 axis_point = PointAtArcLength(centerline, arc, s);
+  const Vec3 tangent = ChordTangent(centerline, arc, s, 0.5);
+  const Vec3 to_camera = camera_center - axis_point;
+  const Vec3 towards = (to_camera - to_camera.dot(tangent) * tangent).normalized();
+  const Vec3 across = tangent.cross(towards);
+  return axis_point + radius * (std::cos(angle) * towards + std::sin(angle) * across);
+}
+
+// The share of tape around a sub-pixel point: the labels of the four nearest
+// pixels (tape 1, body 0) interpolated bilinearly; nullopt when one of them
+// is off the body or outside the image.
+std::optional<double> TapeShare(const cv::Mat& labels, const Vec2& pixel) {
+  const int x0 = static_cast<int>(std::floor(pixel.x()));
+  const int y0 = static_cast<int>(std::floor(pixel.y()));
+  if (x0 < 0 || y0 < 0 || x0 + 1 >= labels.cols || y0 + 1 >= labels.rows) return std::nullopt;
+  const uint8_t* top = labels.ptr<uint8_t>(y0) + x0;
+  const uint8_t* bottom = labels.ptr<uint8_t>(y0 + 1) + x0;
+  if (top[0] == kLabelNone || top[1] == kLabelNone || bottom[0] == kLabelNone ||
+      bottom[1] == kLabelNone) {
+    return std::nullopt;
   }
+  const auto tape = [](uint8_t label) { return label == kLabelMarker ? 1.0 : 0.0; };
+  const double fx = pixel.x() - x0;
+  const double fy = pixel.y() - y0;
+  return (1.0 - fy) * ((1.0 - fx) * tape(top[0]) + fx * tape(top[1])) +
+         fy * ((1.0 - fx) * tape(bottom[0]) + fx * tape(bottom[1]));
 }
 
-// The labels along the projected centreline from arc `first` to `last`, every
-// kLabelStep. The centreline is projected every kProjectStep and the pixels
-// interpolated between: the image of a curve is smooth on that scale.
-void ReadLabels(const Camera& camera, const Silhouette& silhouette, const Polyline& centerline,
-                const std::vector<double>& arc, double first, double last,
-                std::vector<Seen>* seen) {
-  constexpr int kSubsteps = 5;
-  constexpr double kProjectStep = kLabelStep * kSubsteps;
-  seen->clear();
-  std::optional<Vec2> previous = camera.Project(PointAtArcLength(centerline, arc, first));
-  for (double s = first; s + kProjectStep <= last + 1e-9; s += kProjectStep) {
-    const std::optional<Vec2> next =
-        camera.Project(PointAtArcLength(centerline, arc, s + kProjectStep));
-    for (int k = 0; k < kSubsteps; ++k) {
-      seen->push_back(previous && next ? LabelAt(camera, silhouette,
-                                                 *previous + (*next - *previous) * k / kSubsteps)
-                                       : Seen::kUnknown);
+// Pixels per mm along the tube's facing line at the seed.
+double PixelsPerMm(const Camera& camera, const Polyline& centerline, const std::vector<double>& arc,
+                   const BandWindow& window, double radius) {
+  const Vec3 c = camera.Center();
+  const std::optional<Vec2> a =
+      camera.Project(SurfacePoint(centerline, arc, window.seed - 0.5, radius, c, 0.0));
+  const std::optional<Vec2> b =
+      camera.Project(SurfacePoint(centerline, arc, window.seed + 0.5, radius, c, 0.0));
+  return a && b ? (*b - *a).norm() : 0.0;
+}
+
+// The tape share along one surface line, every `step` mm from window.first
+// (NaN where it cannot be read).
+void ReadLine(const Camera& camera, const cv::Mat& labels, const Polyline& centerline,
+              const std::vector<double>& arc, const BandWindow& window, double radius, double angle,
+              double step, std::vector<double>* share) {
+  share->clear();
+  const Vec3 c = camera.Center();
+  const auto project = [&](double s) {
+    return camera.Project(SurfacePoint(centerline, arc, s, radius, c, angle));
+  };
+  double s0 = window.first;
+  std::optional<Vec2> p0 = project(s0);
+  double s = window.first;
+  while (s0 < window.last - 1e-9) {
+    const double s1 = std::min(s0 + kProjectStep, window.last);
+    const std::optional<Vec2> p1 = project(s1);
+    for (; s <= s1 + 1e-9; s += step) {
+      std::optional<double> value;
+      if (p0 && p1) value = TapeShare(labels, *p0 + (*p1 - *p0) * ((s - s0) / (s1 - s0)));
+      share->push_back(value.value_or(std::numeric_limits<double>::quiet_NaN()));
     }
-    previous = next;
+    s0 = s1;
+    p0 = p1;
   }
 }
 
-// cot θ between the axis and the direction from p to the camera.
-double FrontShiftPerRadius(const Camera& camera, const Vec3& p, const Vec3& tangent) {
-  const Vec3 to_camera = (camera.Center() - p).normalized();
-  const double sine = tangent.cross(to_camera).norm();
-  return tangent.dot(to_camera) / std::max(sine, 1e-6);
-}
-
-// The band's centre as one camera sees it (shift not yet added back): the run
-// of tape around `expected` with body on both sides; nullopt when the run
-// reaches the window's end or meets an unknown label.
-std::optional<double> RunCenter(const std::vector<Seen>& seen, double first, double expected) {
-  const int n = static_cast<int>(seen.size());
-  if (n < 3) return std::nullopt;
-  const int guess =
-      std::clamp(static_cast<int>(std::lround((expected - first) / kLabelStep)), 0, n - 1);
-  // The tape sample nearest the guess.
+// The run of tape nearest the seed on one line, its edges where the share
+// crosses one half: [low, high] in mm, or nullopt when the run does not end
+// on readable body at both sides within the window.
+std::optional<std::pair<double, double>> EdgesOnLine(const std::vector<double>& share,
+                                                     const BandWindow& window, double step) {
+  const int n = static_cast<int>(share.size());
+  const auto tape = [&](int k) { return share[static_cast<size_t>(k)] >= 0.5; };
+  const auto body = [&](int k) { return share[static_cast<size_t>(k)] < 0.5; };  // NaN: neither
+  const int guess = std::clamp(static_cast<int>(std::lround((window.seed - window.first) / step)),
+                               0, std::max(n - 1, 0));
   int start = -1;
   for (int d = 0; d < n && start < 0; ++d) {
-    for (const int k : {guess - d, guess + d}) {
-      if (k >= 0 && k < n && seen[static_cast<size_t>(k)] == Seen::kTape) {
-        start = k;
-        break;
-      }
-    }
+    if (guess - d >= 0 && tape(guess - d))
+      start = guess - d;
+    else if (guess + d < n && tape(guess + d))
+      start = guess + d;
   }
   if (start < 0) return std::nullopt;
   int low = start;
   int high = start;
-  while (low > 0 && seen[static_cast<size_t>(low - 1)] == Seen::kTape) --low;
-  while (high + 1 < n && seen[static_cast<size_t>(high + 1)] == Seen::kTape) ++high;
-  if (low == 0 || high == n - 1) return std::nullopt;
-  if (seen[static_cast<size_t>(low - 1)] != Seen::kBody ||
-      seen[static_cast<size_t>(high + 1)] != Seen::kBody) {
-    return std::nullopt;
-  }
-  // The ends lie halfway between the last body and the first tape samples.
-  return first + kLabelStep * 0.5 * (low + high);
+  while (low > 0 && tape(low - 1)) --low;
+  while (high + 1 < n && tape(high + 1)) ++high;
+  if (low == 0 || high == n - 1 || !body(low - 1) || !body(high + 1)) return std::nullopt;
+  const auto crossing = [&](int outside, int inside) {
+    const double a = share[static_cast<size_t>(outside)];
+    const double b = share[static_cast<size_t>(inside)];
+    return outside + (inside - outside) * (0.5 - a) / (b - a);
+  };
+  return std::make_pair(window.first + step * crossing(low - 1, low),
+                        window.first + step * crossing(high + 1, high));
 }
 
-std::optional<double> RefineOneMarker(const Rig& rig, const std::vector<Silhouette>& silhouettes,
-                                      const Polyline& centerline, const std::vector<double>& arc,
-                                      double radius, double center) {
-  const double first = std::max(0.0, center - kMaxHalfWidth - kLabelMargin);
-  const double last = std::min(arc.back(), center + kMaxHalfWidth + kLabelMargin);
-  const Vec3 tangent = ChordTangent(centerline, arc, center, 2.0);
-  std::vector<Seen> seen;
-  double weighted = 0.0;
-  double weights = 0.0;
+bool PlausibleWidth(double width, const BandWindow& window, double mm_per_px) {
+  if (window.width <= 0.0) return width >= kMinUnknownWidth && width <= kMaxUnknownWidth;
+  return std::abs(width - window.width) <= 0.3 * window.width + 2.0 * mm_per_px;
+}
+
+// True when another part of the tube, farther along it than a few radii,
+// crosses the rays from the camera to the band's window: its labels there
+// would be that part's.
+bool OtherPartInFront(const Camera& camera, const Polyline& centerline,
+                      const std::vector<double>& arc, const BandWindow& window, double radius) {
+  constexpr double kRayStep = 2.5;   // mm between the rays tested
+  constexpr double kPartStep = 2.0;  // mm between the other parts' points
+  const double reach = 2.0 * radius + 0.5 * std::max(kRayStep, kPartStep) + 0.5;
+  const double keep_out = 4.0 * radius;
+  const Vec3 c = camera.Center();
+  for (double s = window.first; s <= window.last + 1e-9; s += kRayStep) {
+    const Vec3 target = PointAtArcLength(centerline, arc, s);
+    const Vec3 ray = target - c;
+    const double length_sq = ray.squaredNorm();
+    for (double t = 0.0; t <= arc.back(); t += kPartStep) {
+      if (t > window.first - keep_out && t < window.last + keep_out) continue;
+      const Vec3 other = PointAtArcLength(centerline, arc, t) - c;
+      const double along = other.dot(ray) / length_sq;
+      if (along <= 0.0 || along >= 1.0) continue;
+      if ((other - along * ray).norm() < reach) return true;
+    }
+  }
+  return false;
+}
+
+// The band as one camera sees it; nullopt when it cannot be read there.
+std::optional<ViewBand> ReadBandInView(const Camera& camera, const cv::Mat& labels,
+                                       const Polyline& centerline, const std::vector<double>& arc,
+                                       const BandWindow& window, double radius) {
+  const double px_per_mm = PixelsPerMm(camera, centerline, arc, window, radius);
+  if (px_per_mm < 0.2) return std::nullopt;  // along the line of sight: nothing to read
+  if (OtherPartInFront(camera, centerline, arc, window, radius)) return std::nullopt;
+  const double mm_per_px = 1.0 / px_per_mm;
+  const double step = std::min(kReadStepPx * mm_per_px, 0.25);
+  std::vector<double> share;
+  std::vector<double> centers;
+  std::vector<double> widths;
+  for (int k = 0; k < kLines; ++k) {
+    const double angle = -kMaxLineAngle + 2.0 * kMaxLineAngle * k / (kLines - 1);
+    ReadLine(camera, labels, centerline, arc, window, radius, angle, step, &share);
+    const std::optional<std::pair<double, double>> edges = EdgesOnLine(share, window, step);
+    if (!edges || !PlausibleWidth(edges->second - edges->first, window, mm_per_px)) continue;
+    centers.push_back(0.5 * (edges->first + edges->second));
+    widths.push_back(edges->second - edges->first);
+  }
+  if (static_cast<int>(centers.size()) < kMinLines) return std::nullopt;
+  // The lines that agree with their median; one crossing a stray label is dropped.
+  std::vector<double> sorted = centers;
+  std::nth_element(sorted.begin(), sorted.begin() + static_cast<long>(sorted.size() / 2),
+                   sorted.end());
+  const double median = sorted[sorted.size() / 2];
+  const double tolerance = std::max(0.3, 1.5 * mm_per_px);
+  double sum = 0.0;
+  double sum_sq = 0.0;
+  double width_sum = 0.0;
+  int count = 0;
+  for (size_t i = 0; i < centers.size(); ++i) {
+    if (std::abs(centers[i] - median) > tolerance) continue;
+    sum += centers[i];
+    sum_sq += centers[i] * centers[i];
+    width_sum += widths[i];
+    ++count;
+  }
+  if (count < kMinLines) return std::nullopt;
+  const double mean = sum / count;
+  const double spread_sq = std::max(0.0, sum_sq / count - mean * mean) * count / (count - 1);
+  const double quantisation = kCentreQuantisationPx * mm_per_px;
+  return ViewBand{mean, width_sum / count,
+                  std::sqrt(spread_sq / count + quantisation * quantisation)};
+}
+
+// The views fused by their inverse variances, dropping (with three or more)
+// the one that disagrees most while any does; nullopt when what remains
+// still disagrees: the band is ambiguous.
+std::optional<MarkerOnCurve> FuseViews(std::vector<ViewBand> views) {
+  while (!views.empty()) {
+    double weights = 0.0;
+    double center = 0.0;
+    double width = 0.0;
+    for (const ViewBand& v : views) {
+      const double w = 1.0 / (v.std * v.std);
+      weights += w;
+      center += w * v.center;
+      width += w * v.width;
+    }
+    center /= weights;
+    width /= weights;
+    const double std = 1.0 / std::sqrt(weights);
+    size_t worst = 0;
+    double worst_score = 0.0;
+    for (size_t i = 0; i < views.size(); ++i) {
+      const double off = std::abs(views[i].center - center);
+      const double score = off < kMinDisagreement ? 0.0 : off / std::hypot(views[i].std, std);
+      if (score > worst_score) {
+        worst_score = score;
+        worst = i;
+      }
+    }
+    if (worst_score <= kMaxNormalisedDisagreement) {
+      MarkerOnCurve marker;
+      marker.arc_length = center;
+      marker.std_mm = std;
+      marker.width = width;
+      marker.views = static_cast<int>(views.size());
+      return marker;
+    }
+    if (views.size() < 3) return std::nullopt;
+    views.erase(views.begin() + static_cast<long>(worst));
+  }
+  return std::nullopt;
+}
+
+std::optional<MarkerOnCurve> LocateBand(const Rig& rig, const std::vector<Silhouette>& silhouettes,
+                                        const Polyline& centerline, const std::vector<double>& arc,
+                                        double radius, const BandWindow& window) {
+  std::vector<ViewBand> views;
   for (size_t k = 0; k < rig.cameras.size(); ++k) {
     const Camera& camera = rig.cameras[k];
     const cv::Mat& labels = silhouettes[k].labels;
     if (labels.type() != CV_8U || labels.cols != camera.width || labels.rows != camera.height) {
       continue;  // no labels (or not this camera's): no tape to read
     }
-    const double shift =
-        radius * FrontShiftPerRadius(camera, PointAtArcLength(centerline, arc, center), tangent);
-    ReadLabels(camera, silhouettes[k], centerline, arc, first, last, &seen);
-    const std::optional<double> run = RunCenter(seen, first, center - shift);
-    if (!run || std::abs(*run + shift - center) > kLabelMargin) continue;
-    // Seen obliquely, a pixel spans more of the axis: weight by sin² θ.
-    const double sine_sq = 1.0 / (1.0 + (shift / radius) * (shift / radius));
-    weighted += sine_sq * (*run + shift);
-    weights += sine_sq;
+    if (const std::optional<ViewBand> view =
+            ReadBandInView(camera, labels, centerline, arc, window, radius)) {
+      views.push_back(*view);
+    }
   }
-  if (weights <= 0.0) return std::nullopt;
-  return weighted / weights;
+  return FuseViews(std::move(views));
 }
 
 }  // namespace
 
-void RefineMarkersInImages(const Rig& rig, const std::vector<Silhouette>& silhouettes,
-                           const Polyline& centerline, const std::vector<double>& arc,
-                           double radius, std::vector<MarkerOnCurve>* markers) {
+void LocateBandsInImages(const Rig& rig, const std::vector<Silhouette>& silhouettes,
+                         const Polyline& centerline, const std::vector<double>& arc, double radius,
+                         const BandPrior& prior, std::vector<MarkerOnCurve>* markers) {
   if (silhouettes.size() != rig.cameras.size() || centerline.size() < 2) return;
-  for (MarkerOnCurve& marker : *markers) {
-    const std::optional<double> center =
-        RefineOneMarker(rig, silhouettes, centerline, arc, radius, marker.arc_length);
-    if (!center) continue;
-    marker.arc_length = std::clamp(*center, 0.0, arc.back());
-    marker.point = PointAtArcLength(centerline, arc, marker.arc_length);
+  const double half_reach =
+      0.5 * (prior.width > 0.0 ? prior.width : kMaxUnknownWidth) + prior.seed_error;
+  std::vector<MarkerOnCurve> located;
+  for (const MarkerOnCurve& seed : *markers) {
+    BandWindow window;
+    window.seed = seed.arc_length;
+    window.first = std::max(0.0, seed.arc_length - half_reach);
+    window.last = std::min(arc.back(), seed.arc_length + half_reach);
+    window.width = prior.width;
+    std::optional<MarkerOnCurve> band =
+        LocateBand(rig, silhouettes, centerline, arc, radius, window);
+    if (!band) continue;  // hidden or ambiguous: missing, not placed from voxels
+    band->voxels = seed.voxels;
+    band->arc_length = std::clamp(band->arc_length, 0.0, arc.back());
+    band->point = PointAtArcLength(centerline, arc, band->arc_length);
+    located.push_back(*band);
   }
-  std::sort(markers->begin(), markers->end(), [](const MarkerOnCurve& a, const MarkerOnCurve& b) {
+  std::sort(located.begin(), located.end(), [](const MarkerOnCurve& a, const MarkerOnCurve& b) {
     return a.arc_length < b.arc_length;
   });
+  // Two seeds of one band (a cluster split by a gap in its voxels) find it
+  // twice; the better placed is kept.
+  markers->clear();
+  const double same_band = 0.5 * (prior.width > 0.0 ? prior.width : kMinUnknownWidth);
+  for (const MarkerOnCurve& band : located) {
+    if (!markers->empty() && band.arc_length - markers->back().arc_length < same_band) {
+      if (band.std_mm < markers->back().std_mm) markers->back() = band;
+      continue;
+    }
+    markers->push_back(band);
+  }
 }
 
 std::vector<MarkerOnCurve> FindMarkers(const VoxelCloud& cloud, const VoxelGraph& graph,
@@ -160,7 +352,8 @@ std::vector<MarkerOnCurve> FindMarkers(const VoxelCloud& cloud, const VoxelGraph
   Cluster cluster;
   double last_distance = 0.0;
   const auto close_cluster = [&] {
-    if (cluster.count >= min_voxels) markers.push_back(PlaceOnCurve(cluster, centerline, arc));
+    if (cluster.count >= min_voxels)
+      markers.push_back(PlaceOnCurve(cluster, centerline, arc, cloud.grid.voxel_size));
     cluster = Cluster();
   };
   for (const int32_t i : body.members) {

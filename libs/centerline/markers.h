@@ -12,9 +12,15 @@ namespace shapesense {
 
 // A tape band found on the body.
 struct MarkerOnCurve {
-  double arc_length = 0.0;    // along the centreline, mm
+  double arc_length = 0.0;    // of the band's centre along the centreline, mm
   Vec3 point = Vec3::Zero();  // on the centreline
-  int voxels = 0;
+  int voxels = 0;             // marker voxels of the cluster that seeded it
+  // The band's confidence: the standard error of its centre along the tube,
+  // mm, from the spread of its edges in each view and the views' agreement
+  // (the voxel size when it was placed from voxels alone).
+  double std_mm = 0.0;
+  double width = 0.0;  // measured along the tube, mm (0 when placed from voxels)
+  int views = 0;       // cameras whose edges placed it
 };
 
 // Tape bands from the body's marker-labelled voxels: in order of geodesic
@@ -26,17 +32,42 @@ std::vector<MarkerOnCurve> FindMarkers(const VoxelCloud& cloud, const VoxelGraph
                                        const GeodesicBody& body, const Polyline& centerline,
                                        const std::vector<double>& arc, int min_voxels, double gap);
 
-// Sub-voxel band centres from the images. In each camera the labels are read
-// along the projected centreline around the band; the run of tape pixels
-// there gives the band's two ends to about a pixel. The pixel on the
-// projected axis at arc s shows the tube's front surface, which lies at arc
-// s + radius·cot θ (θ between the axis and the direction to the camera), so
-// both ends, and the centre, appear shifted by that much; it is added back.
-// (The carved marker voxels carry a mixture of these shifts, about a radius.)
-// Combined over the cameras that see the whole band unoccluded; a band no
-// camera sees keeps its place. Markers stay ordered base → tip.
-void RefineMarkersInImages(const Rig& rig, const std::vector<Silhouette>& silhouettes,
-                           const Polyline& centerline, const std::vector<double>& arc,
-                           double radius, std::vector<MarkerOnCurve>* markers);
+// What is known of the bands before they are looked for in the images.
+struct BandPrior {
+  // The bands' width along the tube, mm (0: not known; bands of 1-12 mm are
+  // then accepted). A view whose band is far from this width saw something
+  // else (two bands merged, or another part of the tube across it).
+  double width = 0.0;
+  // How far a seed (a voxel cluster's centre) may lie from its band's
+  // centre, mm: the carved marker voxels carry the views' front-surface
+  // shifts, up to about a radius.
+  double seed_error = 4.0;
+};
+
+// Band centres from the tape's edges in the images, to a fraction of a pixel.
+//
+// In each camera the tube's visible surface is read along several of its
+// lines (generators) spread across the half facing the camera: points at
+// arc s on the surface, c(s) + r·(cos φ·u + sin φ·v), u towards the camera,
+// projected through the lens. The band's two edges are where the tape
+// fraction (bilinear in the labels) crosses one half along each line. A
+// surface line needs no correction for the tube's radius and holds on bends,
+// where the band's edge is a circle in the plane normal to the axis; reading
+// the labels bilinearly and averaging lines of different pixel phases makes
+// the edges sub-pixel.
+//
+// A view counts when its lines agree, both edges lie inside the image and on
+// the body, the band's width is plausible, and no other part of the tube lies
+// between the camera and the band. Its centre's standard error comes from
+// the lines' spread and the label's quantisation in mm along the tube (a
+// foreshortened view, nearly along the axis, spans many mm per pixel and
+// weighs little). The views are fused by their inverse variances; with three
+// or more, one that disagrees with the others is dropped; two that disagree
+// leave the band ambiguous. A band no view places, or an ambiguous one, is
+// removed: it is reported missing, never placed from the voxels alone.
+// Markers stay ordered base → tip.
+void LocateBandsInImages(const Rig& rig, const std::vector<Silhouette>& silhouettes,
+                         const Polyline& centerline, const std::vector<double>& arc, double radius,
+                         const BandPrior& prior, std::vector<MarkerOnCurve>* markers);
 
 }  // namespace shapesense

@@ -278,6 +278,8 @@ std::string ShapeOptions::Validate() const {
   expect(max_base_distance > 0.0 && std::isfinite(max_base_distance), "max_base_distance",
          "a number > 0", max_base_distance);
   expect(min_marker_voxels >= 1, "min_marker_voxels", "an integer >= 1", min_marker_voxels);
+  expect(band_width == 0.0 || (band_width >= 1.0 && band_width <= 30.0), "band_width",
+         "0 (not known) or a number in [1, 30]", band_width);
   return error.str();
 }
 
@@ -389,12 +391,16 @@ ShapeEstimate ShapeEstimator::Estimate(const VoxelCloud& cloud,
       FindMarkers(cloud, graph, body.geodesic, estimate.centerline, estimate.arc_length,
                   options_.min_marker_voxels, kMarkerGapVoxels * cloud.grid.voxel_size);
   if (refine) {
-    RefineMarkersInImages(rig_, silhouettes, estimate.centerline, estimate.arc_length,
-                          estimate.tube_radius, &markers);
+    BandPrior prior;
+    prior.width = options_.band_width;
+    prior.seed_error = estimate.tube_radius + 2.0 * cloud.grid.voxel_size;
+    LocateBandsInImages(rig_, silhouettes, estimate.centerline, estimate.arc_length,
+                        estimate.tube_radius, prior, &markers);
   }
   for (const MarkerOnCurve& marker : markers) {
     estimate.markers.push_back(marker.point);
     estimate.marker_arc_length.push_back(marker.arc_length);
+    estimate.marker_std.push_back(marker.std_mm);
   }
   estimate.valid = true;
   return estimate;

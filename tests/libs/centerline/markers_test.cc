@@ -79,7 +79,7 @@ TEST(FindMarkersTest, IgnoresBandsOfTooFewVoxels) {
 
 // Voxel labels carry the cameras' view-dependent shifts; the images give
 // the band's centre back, whichever way the voxels erred.
-TEST(RefineMarkersInImagesTest, PullsMarkersBackToTheBandsCentres) {
+TEST(LocateBandsInImagesTest, PullsMarkersBackToTheBandsCentres) {
   std::mt19937 rng(23);
   for (int trial = 0; trial < 3; ++trial) {
     const Scene scene = RandomScene(rng);
@@ -92,10 +92,15 @@ TEST(RefineMarkersInImagesTest, PullsMarkersBackToTheBandsCentres) {
       const double guess = tape.center + Uniform(rng, -2.5, 2.5);
       markers.push_back({guess, PointAtArcLength(centerline, arc, guess), 100});
     }
-    RefineMarkersInImages(scene.rig, silhouettes, centerline, arc, scene.radius, &markers);
+    LocateBandsInImages(scene.rig, silhouettes, centerline, arc, scene.radius, BandPrior{},
+                        &markers);
     ASSERT_EQ(markers.size(), scene.tapes.size());
     for (size_t m = 0; m < markers.size(); ++m) {
-      EXPECT_NEAR(markers[m].arc_length, scene.tapes[m].center, 0.3) << "trial " << trial;
+      EXPECT_NEAR(markers[m].arc_length, scene.tapes[m].center, 0.2) << "trial " << trial;
+      EXPECT_NEAR(markers[m].width, scene.tapes[m].width, 0.6) << "trial " << trial;
+      EXPECT_GT(markers[m].std_mm, 0.0);
+      EXPECT_LT(markers[m].std_mm, 0.2);
+      EXPECT_GE(markers[m].views, 2);
       EXPECT_LT(
           (markers[m].point - PointAtArcLength(centerline, arc, markers[m].arc_length)).norm(),
           1e-9);
@@ -103,7 +108,7 @@ TEST(RefineMarkersInImagesTest, PullsMarkersBackToTheBandsCentres) {
   }
 }
 
-TEST(RefineMarkersInImagesTest, LeavesMarkersNoCameraSees) {
+TEST(LocateBandsInImagesTest, ReportsBandsNoCameraSeesAsMissing) {
   std::mt19937 rng(24);
   const Scene scene = RandomScene(rng);
   // Silhouettes without tape: no camera sees a band.
@@ -113,10 +118,8 @@ TEST(RefineMarkersInImagesTest, LeavesMarkersNoCameraSees) {
   const std::vector<double> arc = CumulativeArcLength(centerline);
   std::vector<MarkerOnCurve> markers = {{30.0, PointAtArcLength(centerline, arc, 30.0), 50},
                                         {60.0, PointAtArcLength(centerline, arc, 60.0), 50}};
-  const std::vector<MarkerOnCurve> before = markers;
-  RefineMarkersInImages(scene.rig, silhouettes, centerline, arc, scene.radius, &markers);
-  ASSERT_EQ(markers.size(), 2u);
-  for (size_t m = 0; m < 2; ++m) EXPECT_EQ(markers[m].arc_length, before[m].arc_length);
+  LocateBandsInImages(scene.rig, silhouettes, centerline, arc, scene.radius, BandPrior{}, &markers);
+  EXPECT_TRUE(markers.empty());
 }
 
 }  // namespace
