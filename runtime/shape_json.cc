@@ -47,6 +47,9 @@ nlohmann::json ShapeToJson(const std::string& frame, const ShapeEstimate& shape,
     line["curvature"] = std::move(curvature);
     line["point_arc_length"] = std::move(point_arc);
     line["marker_arc_length"] = std::move(marker_arc);
+    nlohmann::json marker_std = nlohmann::json::array();
+    for (const double s : shape.marker_std) marker_std.push_back(Round(s, 1e-4));
+    line["marker_std_mm"] = std::move(marker_std);
     line["tube_radius"] = Round(shape.tube_radius, 1e-4);
     line["silhouette_residual_mm"] = Round(shape.silhouette_residual_mm, 1e-5);
   }

@@ -38,6 +38,8 @@ shape_t ShapeToMessage(const ShapeEstimate& shape) {
   message.num_markers = static_cast<int32_t>(message.markers.size());
   message.marker_arc_length = shape.marker_arc_length;
   message.marker_arc_length.resize(message.markers.size(), 0.0);
+  message.marker_std_mm = shape.marker_std;
+  message.marker_std_mm.resize(message.markers.size(), 0.0);
   for (int axis = 0; axis < 3; ++axis) message.tip[axis] = shape.tip[axis];
   message.length = shape.length;
   message.centerline_residual_mm = shape.silhouette_residual_mm;
@@ -53,13 +55,14 @@ std::string ValidateShapeMessage(const shape_t& message) {
   }
   const size_t markers = message.markers.size();
   if (message.num_markers < 0 || static_cast<size_t>(message.num_markers) != markers ||
-      message.marker_arc_length.size() != markers) {
-    return Expected("num_markers", "as many markers and marker arc lengths",
+      message.marker_arc_length.size() != markers || message.marker_std_mm.size() != markers) {
+    return Expected("num_markers", "as many markers, marker arc lengths and standard errors",
                     std::to_string(message.num_markers));
   }
   if (!AllFinitePoints(message.centerline) || !AllFinitePoints(message.markers) ||
       !AllFinite(message.arc_length) || !AllFinite(message.curvature) ||
-      !AllFinite(message.marker_arc_length) || !std::isfinite(message.length)) {
+      !AllFinite(message.marker_arc_length) || !AllFinite(message.marker_std_mm) ||
+      !std::isfinite(message.length)) {
     return Expected("centerline, markers, arc lengths, curvature, length", "finite numbers",
                     "others");
   }
@@ -83,6 +86,7 @@ std::string ShapeFromMessage(const shape_t& message, ShapeEstimate* shape) {
   shape->curvature = message.curvature;
   for (const auto& row : message.markers) shape->markers.push_back(FromRow(row));
   shape->marker_arc_length = message.marker_arc_length;
+  shape->marker_std = message.marker_std_mm;
   shape->tip = Vec3(message.tip[0], message.tip[1], message.tip[2]);
   shape->length = message.length;
   shape->silhouette_residual_mm = message.centerline_residual_mm;

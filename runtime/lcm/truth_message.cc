@@ -51,6 +51,7 @@ shape_t FrameSetTruth(const TubeScene& scene, const TrajectoryPose& pose, int64_
   shape.num_points = static_cast<int32_t>(shape.centerline.size());
   for (const Vec3& marker : truth.markers) shape.markers.push_back(Xyz(marker));
   shape.marker_arc_length = truth.marker_arc_length;
+  shape.marker_std_mm.assign(truth.markers.size(), 0.0);  // exact
   shape.num_markers = static_cast<int32_t>(shape.markers.size());
   std::copy_n(Xyz(truth.tip).begin(), 3, shape.tip);
   shape.length = truth.length;

@@ -155,7 +155,7 @@ bool WireCheck<shape_t>::Plausible(const uint8_t* data, size_t size) {
   int64_t markers = 0;
   return walk.HashAndHeader() && walk.Skip(8 + 8 + 1) && walk.SkipString() && walk.Count(&points) &&
          walk.SkipArray(points, 3 * 8 + 8 + 8) && walk.Count(&markers) &&
-         walk.SkipArray(markers, 3 * 8 + 8) && walk.Skip(kShapeTail) && walk.StageTimes() &&
+         walk.SkipArray(markers, 3 * 8 + 8 + 8) && walk.Skip(kShapeTail) && walk.StageTimes() &&
          walk.AtEnd();
 }
 

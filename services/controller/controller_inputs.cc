@@ -48,6 +48,7 @@ shape_t LoggedShape(const shape_t& shape) {
   logged.num_markers = 0;
   logged.markers.clear();
   logged.marker_arc_length.clear();
+  logged.marker_std_mm.clear();
   return logged;
 }
 

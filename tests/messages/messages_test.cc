@@ -32,6 +32,7 @@ shape_t MakeShape() {
   shape.num_markers = 1;
   shape.markers = {{0, 0, 1.5}};
   shape.marker_arc_length = {1.5};
+  shape.marker_std_mm = {0.04};
   shape.q[0] = 0.01;
   shape.num_stage_times = 1;
   shape.stage_times.push_back({"carving", 250, 1'700'000'000'000'250});
@@ -47,6 +48,7 @@ TEST(MessagesTest, ShapeRoundTripsThroughItsEncoding) {
   EXPECT_EQ(decoded.header.seq, 7);
   EXPECT_EQ(decoded.centerline, shape.centerline);
   EXPECT_EQ(decoded.marker_arc_length, shape.marker_arc_length);
+  EXPECT_EQ(decoded.marker_std_mm, shape.marker_std_mm);
   ASSERT_EQ(decoded.stage_times.size(), 1u);
   EXPECT_EQ(decoded.stage_times[0].stage, "carving");
   EXPECT_EQ(decoded.stage_times[0].duration_us, 250);

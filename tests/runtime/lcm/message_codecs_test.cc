@@ -350,6 +350,7 @@ TEST(MessageConvertTest, ShapesRoundTripAndMalformedOnesAreRejected) {
   }
   shape.markers = {Vec3(1, 2, 3), Vec3(4, 5, 6)};
   shape.marker_arc_length = {10, 20};
+  shape.marker_std = {0.05, 0.08};
   shape.tip = shape.centerline.back();
   shape.length = 49;
   shape.silhouette_residual_mm = 0.03;
@@ -360,6 +361,7 @@ TEST(MessageConvertTest, ShapesRoundTripAndMalformedOnesAreRejected) {
   EXPECT_EQ(back.curvature, shape.curvature);
   EXPECT_EQ(back.markers, shape.markers);
   EXPECT_EQ(back.marker_arc_length, shape.marker_arc_length);
+  EXPECT_EQ(back.marker_std, shape.marker_std);
   EXPECT_EQ(back.tip, shape.tip);
   EXPECT_EQ(back.silhouette_residual_mm, shape.silhouette_residual_mm);
 
@@ -377,6 +379,12 @@ TEST(MessageConvertTest, ShapesRoundTripAndMalformedOnesAreRejected) {
   message = ShapeToMessage(shape);
   message.marker_arc_length.pop_back();
   EXPECT_NE(ShapeFromMessage(message, &back).find("num_markers"), std::string::npos);
+  message = ShapeToMessage(shape);
+  message.marker_std_mm.pop_back();
+  EXPECT_NE(ShapeFromMessage(message, &back).find("num_markers"), std::string::npos);
+  message = ShapeToMessage(shape);
+  message.marker_std_mm[0] = std::numeric_limits<double>::infinity();
+  EXPECT_NE(ShapeFromMessage(message, &back).find("finite"), std::string::npos);
 }
 
 TEST(MessageConvertTest, StageTimesMergeByTheSlowestImage) {

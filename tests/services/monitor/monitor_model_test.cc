@@ -30,6 +30,7 @@ shape_t Shape(int64_t seq) {
   shape.curvature.assign(shape.centerline.size(), 0.0);
   shape.markers = {{0.0, 0.0, 50.0}};
   shape.marker_arc_length = {50.0};
+  shape.marker_std_mm = {0.05};
   shape.num_markers = 1;
   shape.tip[2] = 100.0;
   shape.stage_times.push_back({"carving", 3000, 0});

@@ -24,6 +24,8 @@ shape_t RandomShape(std::mt19937& random, int64_t seq) {
   shape.num_markers = 3;
   for (int i = 0; i < 3; ++i) {
     shape.markers.push_back({coordinate(random), coordinate(random), coordinate(random)});
+    shape.marker_arc_length.push_back(50.0 * i);
+    shape.marker_std_mm.push_back(0.05);
   }
   for (double& t : shape.tip) t = coordinate(random);
   return shape;
