@@ -246,6 +246,32 @@ std::string ManipulatorGeometry::Validate() const {
   return "";
 }
 
+std::string CheckBandWidth(const ManipulatorGeometry& geometry, double band_width) {
+  if (band_width <= 0.0) return "";
+  const TapeLayout& tapes = geometry.tapes;
+  const std::string width = "band_width " + Number(band_width) + " mm";
+  const double junction_to_distal = geometry.rest.distal - tapes.distal_band_before_tip;
+  if (!(junction_to_distal > band_width)) {
+    return width + " is wider than the " + Number(junction_to_distal) +
+           " mm between the junction and distal bands: bands wider than the spacing between them";
+  }
+  if (tapes.BandCount() == 3 && !(tapes.proximal_band_before_junction > band_width)) {
+    return width + " is wider than the " + Number(tapes.proximal_band_before_junction) +
+           " mm between the proximal and junction bands: bands wider than the spacing between "
+           "them";
+  }
+  if (!(tapes.distal_band_before_tip >= 0.5 * band_width)) {
+    return width + ": the distal band, centred " + Number(tapes.distal_band_before_tip) +
+           " mm before the tip, runs off the tube's end";
+  }
+  if (!(tapes.proximal_band_before_junction + 0.5 * band_width <= geometry.rest.proximal)) {
+    return width + ": the proximal band, centred " + Number(tapes.proximal_band_before_junction) +
+           " mm before the junction, runs off the " + Number(geometry.rest.proximal) +
+           " mm proximal section";
+  }
+  return "";
+}
+
 std::vector<double> TapeArcLengths(const Configuration& q, const SectionLengths& rest,
                                    const TapeLayout& tapes) {
   const SectionLengths compressed = CompressedLengths(q, rest);

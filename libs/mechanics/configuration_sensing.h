@@ -63,6 +63,11 @@ struct ManipulatorGeometry {
   std::string Validate() const;
 };
 
+// "" when bands `band_width` mm wide (0: not known, nothing to check) lie
+// apart on the manipulator at rest, each on its section; else why not,
+// naming band_width and the bands.
+std::string CheckBandWidth(const ManipulatorGeometry& geometry, double band_width);
+
 // Arc length from the base of each band's centre in configuration q, mm,
 // base → tip ([proximal band,] junction band, distal band).
 std::vector<double> TapeArcLengths(const Configuration& q, const SectionLengths& rest,

@@ -2,7 +2,10 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <numbers>
+#include <sstream>
+#include <string>
 
 #include "libs/core/error.h"
 #include "libs/sim/arc_piece.h"
@@ -62,6 +65,47 @@ std::string TrajectoryTape::Validate() const {
   return "";
 }
 
+namespace {
+
+std::string Mm(double value) {
+  std::ostringstream out;
+  out << value << " mm";
+  return out.str();
+}
+
+// "" when the bands fit on a tube `length` mm long, base → tip and apart;
+// else what does not.
+std::string TapesFit(const std::vector<TrajectoryTape>& tapes, double length) {
+  double total = 0.0;
+  for (const TrajectoryTape& tape : tapes) total += tape.width;
+  if (total > length) {
+    return "tapes: " + std::to_string(tapes.size()) + " bands need " + Mm(total) +
+           " of tube, the shortest tube of the motion is " + Mm(length) +
+           ": more bands than the tube can carry";
+  }
+  for (size_t i = 0; i < tapes.size(); ++i) {
+    const std::string key = "tapes[" + std::to_string(i) + "]";
+    const double center = tapes[i].position * length;
+    if (center - 0.5 * tapes[i].width < 0.0 || center + 0.5 * tapes[i].width > length) {
+      return key + ": a band " + Mm(tapes[i].width) + " wide centred " + Mm(center) +
+             " from the base runs off the shortest tube of the motion (" + Mm(length) + ")";
+    }
+    if (i == 0) continue;
+    const double gap = center - tapes[i - 1].position * length;
+    const double half_widths = 0.5 * (tapes[i].width + tapes[i - 1].width);
+    if (!(gap > half_widths)) {
+      return key + ": " + Mm(gap) +
+             " from the band before it on the shortest tube of the motion (" + Mm(length) +
+             "), the bands " + Mm(half_widths) +
+             " wide on average: bands wider than the spacing between them, or out of order "
+             "(base → tip)";
+    }
+  }
+  return "";
+}
+
+}  // namespace
+
 std::vector<TrajectoryKeyframe> DefaultKeyframes() {
   return {{0.0, "arc", 160.0, 0.0, 0.0, 0.0},
           {2.0, "arc", 160.0, 1.6, 0.0, 0.0},
@@ -95,6 +139,9 @@ std::string TrajectoryOptions::Validate() const {
       return "tapes[" + std::to_string(i) + "]." + error;
     }
   }
+  double shortest = std::numeric_limits<double>::infinity();
+  for (const TrajectoryKeyframe& key : Keyframes()) shortest = std::min(shortest, key.length);
+  if (const std::string error = TapesFit(tapes, shortest); !error.empty()) return error;
   if (!(spacing >= 0.05 && spacing <= 0.5)) return Expected("spacing", "0.05-0.5 mm", spacing);
   if (const std::string error = render.Validate(); !error.empty()) return "render." + error;
   return "";

@@ -75,6 +75,11 @@ std::optional<ConfigurationSetup> LoadConfigurationSetup(const ShapeServiceOptio
   if (const std::string error = setup.geometry.Validate(); !error.empty()) {
     throw InputError("configuration." + error + " (model file " + section.manipulator + ")");
   }
+  if (const std::string error = CheckBandWidth(setup.geometry, options.shape.band_width);
+      !error.empty()) {
+    throw InputError("shape." + error + " (tapes of configuration.tapes, model file " +
+                     section.manipulator + ")");
+  }
   return setup;
 }
 

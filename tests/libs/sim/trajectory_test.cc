@@ -136,6 +136,29 @@ TEST(Trajectory, ValidateNamesTheBadKey) {
   EXPECT_NE(options.Validate().find("tapes[2].position"), std::string::npos);
 }
 
+// Bands that cannot all lie apart on the tube are refused by name, before
+// anything is drawn or measured.
+TEST(Trajectory, RefusesBandsTheTubeCannotCarry) {
+  TrajectoryOptions options = TwoKeyframes();
+  ASSERT_EQ(options.Validate(), "");
+  // Wider than the spacing between them: 30 mm apart, 32 mm of half-widths.
+  options.tapes = {{0.2, 4.0}, {0.4, 60.0}};
+  EXPECT_NE(options.Validate().find("wider than the spacing between them"), std::string::npos)
+      << options.Validate();
+  EXPECT_NE(options.Validate().find("tapes[1]"), std::string::npos);
+  // More bands than the tube carries.
+  options.tapes.clear();
+  for (int i = 0; i < 50; ++i) options.tapes.push_back({0.02 * i, 5.0});
+  EXPECT_NE(options.Validate().find("more bands than the tube can carry"), std::string::npos)
+      << options.Validate();
+  // A band off the tube's end, on the shortest keyframe.
+  options.tapes = {{0.99, 8.0}};
+  EXPECT_NE(options.Validate().find("runs off"), std::string::npos) << options.Validate();
+  // Out of order.
+  options.tapes = {{0.6, 4.0}, {0.3, 4.0}};
+  EXPECT_NE(options.Validate().find("tapes[1]"), std::string::npos) << options.Validate();
+}
+
 // A keyframe given in a file takes TrajectoryKeyframe's defaults for what it
 // leaves out, whatever the built-in keyframes are.
 TEST(Trajectory, KeyframesOfAFileStartFromTheKeyframeDefaults) {

@@ -270,6 +270,25 @@ TEST_F(ShapeConfigurationFilesTest, BadModelsAndKeysAreNamed) {
   bad.sensing.max_strain = -1.0;
   EXPECT_NE(error_of(bad, ShippedModel()).find("configuration.sensing.max_strain"),
             std::string::npos);
+  // Bands of the shape's band_width that the layout cannot carry apart.
+  ShapeServiceOptions wide = LoadShapeServiceOptions(Write(section, ShippedModel()));
+  const auto setup_error = [](const ShapeServiceOptions& o) {
+    try {
+      LoadConfigurationSetup(o);
+    } catch (const InputError& e) {
+      return std::string(e.what());
+    }
+    return std::string();
+  };
+  wide.shape.band_width = 4.0;
+  EXPECT_EQ(setup_error(wide), "");
+  wide.shape.band_width = 24.0;  // the distal band is 10 mm before the tip
+  EXPECT_NE(setup_error(wide).find("shape.band_width 24 mm: the distal band"), std::string::npos)
+      << setup_error(wide);
+  wide.configuration.tapes.proximal_band_before_junction = 15.0;
+  wide.shape.band_width = 16.0;
+  EXPECT_NE(setup_error(wide).find("wider than the spacing between them"), std::string::npos)
+      << setup_error(wide);
   // Enabled without a model file.
   ShapeServiceOptions options = testing::TestShapeOptions();
   options.configuration.enabled = true;
