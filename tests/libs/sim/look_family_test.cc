@@ -1,15 +1,18 @@
 // The renderer's looks: shading models, exposure gain and supersampling
-// (RenderOptions).
+// (RenderOptions), and the family of looks built from them (look_family.h).
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <cmath>
 #include <opencv2/imgproc.hpp>
 #include <optional>
+#include <set>
 #include <string>
 #include <tuple>
 #include <utility>
 
+#include "libs/geometry/polyline.h"
+#include "libs/sim/look_family.h"
 #include "libs/sim/scene_generators.h"
 #include "libs/sim/tube_scene.h"
 #include "tests/libs/sim/sim_test_util.h"
@@ -341,6 +344,225 @@ TEST(RenderLooksTest, RenderImageHonoursGainShadingAndSupersampling) {
     EXPECT_LE(cv::norm(fast, exact[i].image, cv::NORM_INF), 1.0) << "camera " << i;
     EXPECT_EQ(cv::norm(fast, exact[i].image, cv::NORM_INF, Interior(exact[i].truth_mask, 1)), 0.0)
         << "camera " << i;
+  }
+}
+
+// Hue in degrees (-180 to 180, 0 red, positive towards yellow) and saturation (0-1), HSV.
+struct Hsv {
+  double hue = 0.0;
+  double saturation = 0.0;
+};
+
+Hsv HsvOf(double b, double g, double r) {
+  const double high = std::max({b, g, r});
+  const double spread = high - std::min({b, g, r});
+  if (spread <= 0.0) return {};
+  double hue = 60.0 * (4.0 + (r - g) / spread);  // blue highest
+  if (high == r) hue = 60.0 * (g - b) / spread;
+  if (high == g && high != r) hue = 60.0 * (2.0 + (b - r) / spread);
+  return {hue > 180.0 ? hue - 360.0 : hue, spread / high};
+}
+
+Hsv HsvOf(const std::array<uint8_t, 3>& bgr) { return HsvOf(bgr[0], bgr[1], bgr[2]); }
+Hsv HsvOf(const std::array<double, 3>& bgr) { return HsvOf(bgr[0], bgr[1], bgr[2]); }
+
+TEST(LookFamilyTest, HsvOfKnownColours) {
+  EXPECT_NEAR(HsvOf(0, 0, 255).hue, 0.0, 1e-9);
+  EXPECT_NEAR(HsvOf(0, 255, 255).hue, 60.0, 1e-9);    // yellow
+  EXPECT_NEAR(HsvOf(255, 0, 255).hue, -60.0, 1e-9);   // magenta
+  EXPECT_NEAR(HsvOf(255, 0, 0).hue, -120.0, 1e-9);    // blue
+  EXPECT_NEAR(HsvOf(35, 30, 190).hue, -1.875, 1e-9);  // the independent renderer's tape
+  EXPECT_NEAR(HsvOf(100, 100, 200).saturation, 0.5, 1e-9);
+  EXPECT_EQ(HsvOf(60, 60, 60).saturation, 0.0);
+}
+
+TEST(LookFamilyTest, IsTheSameEveryTimeAndEveryLookValidates) {
+  const std::vector<Look> looks = LookFamily();
+  const std::vector<Look> again = LookFamily();
+  ASSERT_GE(looks.size(), 10u);
+  ASSERT_LE(looks.size(), 14u);
+  ASSERT_EQ(again.size(), looks.size());
+  std::set<std::string> names;
+  for (size_t k = 0; k < looks.size(); ++k) {
+    EXPECT_EQ(looks[k].render.Validate(), "") << looks[k].name;
+    EXPECT_TRUE(names.insert(looks[k].name).second) << "two looks named " << looks[k].name;
+    EXPECT_EQ(again[k].name, looks[k].name);
+    EXPECT_EQ(again[k].tape_bgr, looks[k].tape_bgr);
+    EXPECT_EQ(again[k].render.body_bgr, looks[k].render.body_bgr);
+  }
+  EXPECT_EQ(looks[0].render.body_bgr, RenderOptions{}.body_bgr) << "the first is the reference";
+}
+
+// What the family is for: it must span what issue 16 lists.
+TEST(LookFamilyTest, SpansHuesWidthsBodiesShadingExposureAndObliqueness) {
+  std::set<std::string> shadings;
+  std::set<double> elevations;
+  double low_hue = 0.0, high_hue = 0.0, low_gain = 1.0, high_gain = 1.0;
+  double narrowest = 100.0, widest = 0.0;
+  int pale = 0, supersampled = 0, near_black = 0, light_grey = 0, bluish = 0, dark_red = 0;
+  for (const Look& look : LookFamily()) {
+    const RenderOptions& render = look.render;
+    const Hsv tape = HsvOf(look.tape_bgr);
+    low_hue = std::min(low_hue, tape.hue);
+    high_hue = std::max(high_hue, tape.hue);
+    pale += tape.saturation < 0.55;
+    dark_red += look.tape_bgr == std::array<uint8_t, 3>{35, 30, 190};
+    narrowest = std::min(narrowest, look.band_width);
+    widest = std::max(widest, look.band_width);
+    const auto& body = render.body_bgr;
+    near_black += *std::max_element(body.begin(), body.end()) < 35.0;
+    light_grey += *std::min_element(body.begin(), body.end()) >= 140.0;
+    bluish += body[0] > body[2] + 30.0;
+    shadings.insert(render.shading);
+    low_gain = std::min(low_gain, render.exposure_gain);
+    high_gain = std::max(high_gain, render.exposure_gain);
+    supersampled += render.supersampling == 3;
+    elevations.insert(look.elevation_deg);
+    EXPECT_GE(render.noise_sigma, 1.5) << look.name;
+    EXPECT_LE(render.noise_sigma, 3.5) << look.name;
+  }
+  EXPECT_LE(low_hue, -30.0);  // magenta-red
+  EXPECT_GE(high_hue, 20.0);  // orange-red
+  EXPECT_GE(pale, 2);
+  EXPECT_GE(dark_red, 1);
+  EXPECT_EQ(narrowest, 3.0);
+  EXPECT_EQ(widest, 8.0);
+  EXPECT_GE(near_black, 2);
+  EXPECT_GE(light_grey, 2);
+  EXPECT_GE(bluish, 1);
+  EXPECT_EQ(shadings, (std::set<std::string>{"lambert", "phong", "wrap"}));
+  EXPECT_GE(low_gain, 0.97);
+  EXPECT_LE(low_gain, 0.98);
+  EXPECT_LE(high_gain, 1.03);
+  EXPECT_GE(high_gain, 1.02);
+  EXPECT_GE(supersampled, 3);
+  EXPECT_EQ(elevations, (std::set<double>{0.0, 20.0, 40.0, 55.0, 70.0}));
+}
+
+// The brightest green a colour reaches under the look's shading and exposure.
+double BrightestGreen(const RenderOptions& render, double green) {
+  const double highlight = render.shading == "phong" ? 255.0 * render.specular : 0.0;
+  return (green * (render.ambient + render.diffuse) + highlight) * render.exposure_gain;
+}
+
+// By the numbers, before any rendering: the silhouette's green margin, the
+// tape's hue and saturation, and a body the tape classifier cannot take for tape.
+TEST(LookFamilyTest, ColoursKeepTheSilhouettesGreenMarginAndTheTapeApart) {
+  for (const Look& look : LookFamily()) {
+    const RenderOptions& render = look.render;
+    const double darkest_backdrop = render.backdrop_bgr[1] * (1.0 - render.backdrop_vignette);
+    EXPECT_LE(BrightestGreen(render, look.tape_bgr[1]), darkest_backdrop - 60.0) << look.name;
+    EXPECT_LE(BrightestGreen(render, render.body_bgr[1]), darkest_backdrop - 60.0) << look.name;
+    const Hsv tape = HsvOf(look.tape_bgr);
+    EXPECT_LE(std::abs(tape.hue), 35.0) << look.name;
+    EXPECT_GE(tape.saturation, 0.4) << look.name;
+    const Hsv body = HsvOf(render.body_bgr);
+    EXPECT_TRUE(body.saturation < 0.25 || std::abs(body.hue) >= 90.0)
+        << look.name << ": body hue " << body.hue << " saturation " << body.saturation;
+  }
+}
+
+// Every look rendered once on a synthetic rig at its elevation.
+struct LookRender {
+  Look look;
+  Rig rig;
+  TubeScene scene;
+  std::vector<RenderedView> views;
+};
+
+const std::vector<LookRender>& FamilyRenders() {
+  static const std::vector<LookRender> renders = [] {
+    std::vector<LookRender> all;
+    uint32_t seed = 0;
+    for (const Look& look : LookFamily()) {
+      SyntheticRigOptions rig_options;
+      rig_options.elevation_deg = look.elevation_deg;
+      rig_options.seed = seed;
+      LookRender render{look, MakeSyntheticRig(rig_options), {}, {}};
+      render.scene = RandomScene(render.rig, 100 + seed, 1.5, 3);
+      ApplyLook(look, &render.scene);
+      render.views = RenderScene(render.rig, render.scene, look.render, seed);
+      all.push_back(std::move(render));
+      ++seed;
+    }
+    return all;
+  }();
+  return renders;
+}
+
+TEST(LookFamilyTest, ApplyLookGivesEveryBandTheLooksColourAndWidth) {
+  for (const LookRender& render : FamilyRenders()) {
+    ASSERT_EQ(render.scene.tapes.size(), 3u);
+    for (const TapeBand& tape : render.scene.tapes) {
+      EXPECT_EQ(tape.bgr, render.look.tape_bgr);
+      EXPECT_EQ(tape.width, render.look.band_width);
+    }
+  }
+}
+
+// The silhouette extractor's test (|green - background green| > 30) finds
+// the tube where the truth mask has it, outline pixels included.
+TEST(LookFamilyTest, EveryLooksTruthMaskShowsInTheGreenDifference) {
+  for (const LookRender& render : FamilyRenders()) {
+    for (size_t c = 0; c < render.views.size(); ++c) {
+      const RenderedView& view = render.views[c];
+      cv::Mat image_green, background_green, difference;
+      cv::extractChannel(view.image, image_green, 1);
+      cv::extractChannel(view.background, background_green, 1);
+      cv::absdiff(image_green, background_green, difference);
+      const int tube = cv::countNonZero(view.truth_mask);
+      const int found = cv::countNonZero((difference > 30) & view.truth_mask);
+      ASSERT_GT(tube, 500) << render.look.name << " camera " << c;
+      EXPECT_GE(found, 0.97 * tube)
+          << render.look.name << " camera " << c << ": " << found << " of " << tube;
+    }
+  }
+}
+
+// Whether the segment from the camera to `point` passes through the tube
+// away from the arc length `s` (another part of the tube hides the point).
+bool Hidden(const Vec3& camera, const Vec3& point, const TubeScene& scene, double s) {
+  const std::vector<double> arc = CumulativeArcLength(scene.centerline);
+  const Vec3 towards = point - camera;
+  for (double t = 0.0; t <= arc.back(); t += 0.5) {
+    if (std::abs(t - s) < 4.0 * scene.radius) continue;
+    const Vec3 p = PointAtArcLength(scene.centerline, arc, t);
+    const double along = std::clamp((p - camera).dot(towards) / towards.squaredNorm(), 0.0, 1.0);
+    if ((camera + along * towards - p).norm() < scene.radius + 0.3) return true;
+  }
+  return false;
+}
+
+// The surface point of each band's centre that faces a camera shows a
+// reddish, saturated colour in every look, shaded, lit, noisy or supersampled.
+TEST(LookFamilyTest, EveryLooksTapeCentresAreReddishAndSaturated) {
+  for (const LookRender& render : FamilyRenders()) {
+    const TubeScene& scene = render.scene;
+    const std::vector<double> arc = CumulativeArcLength(scene.centerline);
+    int checked = 0, hidden = 0;
+    for (size_t c = 0; c < render.views.size(); ++c) {
+      const Camera& camera = render.rig.cameras[c];
+      for (const TapeBand& tape : scene.tapes) {
+        const double s = tape.center_arc_length;
+        const Vec3 center = PointAtArcLength(scene.centerline, arc, s);
+        const Vec3 tangent = testing::TangentAt(scene.centerline, arc, s);
+        Vec3 towards = camera.Center() - center;
+        towards = (towards - towards.dot(tangent) * tangent).normalized();
+        const Vec3 facing = center + scene.radius * towards;
+        if (Hidden(camera.Center(), facing, scene, s)) {
+          ++hidden;
+          continue;
+        }
+        const Vec2 pixel = *camera.Project(facing);
+        const cv::Vec3b bgr = render.views[c].image.at<cv::Vec3b>(
+            static_cast<int>(std::lround(pixel.y())), static_cast<int>(std::lround(pixel.x())));
+        const Hsv hsv = HsvOf(bgr[0], bgr[1], bgr[2]);
+        EXPECT_LE(std::abs(hsv.hue), 35.0) << render.look.name << " " << camera.name << " " << bgr;
+        EXPECT_GE(hsv.saturation, 0.3) << render.look.name << " " << camera.name << " " << bgr;
+        ++checked;
+      }
+    }
+    EXPECT_GE(checked, 2 * hidden + 3) << render.look.name;
   }
 }
 
