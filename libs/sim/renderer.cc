@@ -2,6 +2,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <map>
 #include <mutex>
 #include <opencv2/imgproc.hpp>
 #include <stdexcept>
@@ -31,13 +32,46 @@ cv::Vec3f BaseColour(const RenderOptions& options, const TubeScene& scene, doubl
                    static_cast<float>(body[2]));
 }
 
-// Lambertian shading; tapes are chosen by the arc length of the closest axis
-// point, so their edges are sharp on the tube.
-cv::Vec3f ShadedColour(const RenderOptions& options, const TubeScene& scene, const Vec3& light_cam,
-                       const SurfacePoint& surface) {
+// The options' light in one camera's frame, resolved once per view.
+struct Lighting {
+  ShadingModel model = ShadingModel::kLambert;
+  Vec3 light_cam = Vec3::UnitZ();  // unit, towards the light
+};
+
+Lighting LightingOf(const Camera& camera, const RenderOptions& options) {
+  const Vec3 light(options.light_direction[0], options.light_direction[1],
+                   options.light_direction[2]);
+  return {options.shading_model(), (camera.cam_from_world.linear() * light).normalized()};
+}
+
+// The diffuse term's share (0-1) at a normal whose cosine to the light is n_dot_l.
+double DiffuseShare(const RenderOptions& options, ShadingModel model, double n_dot_l) {
+  if (model != ShadingModel::kWrap) return std::max(0.0, n_dot_l);
+  return std::max(0.0, (n_dot_l + options.wrap) / (1.0 + options.wrap));
+}
+
+// Blinn-Phong highlight in grey levels, white (the light's colour, not the
+// surface's), on lit faces only; `direction` is the viewing ray's.
+float Highlight(const RenderOptions& options, const Vec3& normal, const Vec3& light,
+                const Vec3& direction) {
+  const Vec3 halfway = light - direction;
+  if (normal.dot(light) <= 0.0 || halfway.norm() < 1e-9) return 0.0f;
+  const double cosine = std::max(0.0, normal.dot(halfway.normalized()));
+  return static_cast<float>(255.0 * options.specular * std::pow(cosine, options.shininess));
+}
+
+// Tapes are chosen by the arc length of the closest axis point, so their
+// edges are sharp on the tube (within a pixel, supersampling softens them).
+cv::Vec3f ShadedColour(const RenderOptions& options, const TubeScene& scene,
+                       const Lighting& lighting, const SurfacePoint& surface,
+                       const Vec3& direction) {
+  const double n_dot_l = surface.normal.dot(lighting.light_cam);
   const double light =
-      options.ambient + options.diffuse * std::max(0.0, surface.normal.dot(light_cam));
-  return BaseColour(options, scene, surface.arc_length) * static_cast<float>(light);
+      options.ambient + options.diffuse * DiffuseShare(options, lighting.model, n_dot_l);
+  const cv::Vec3f colour =
+      BaseColour(options, scene, surface.arc_length) * static_cast<float>(light);
+  if (lighting.model != ShadingModel::kPhong) return colour;
+  return colour + cv::Vec3f::all(Highlight(options, surface.normal, lighting.light_cam, direction));
 }
 
 float Coverage(const PixelHit& hit, bool antialias) {
@@ -57,10 +91,7 @@ TubeLayer ShadeTube(const Camera& camera, const RayTable& rays, const TubeRaster
   Polyline axis_cam;
   axis_cam.reserve(axis.points.size());
   for (const Vec3& p : axis.points) axis_cam.push_back(camera.cam_from_world * p);
-  const Vec3 light_cam =
-      (camera.cam_from_world.linear() *
-       Vec3(options.light_direction[0], options.light_direction[1], options.light_direction[2]))
-          .normalized();
+  const Lighting lighting = LightingOf(camera, options);
   TubeLayer layer{cv::Mat(rect.size(), CV_32F, cv::Scalar(0)),
                   cv::Mat(rect.size(), CV_32FC3, cv::Scalar::all(0))};
   const size_t last = axis_cam.size() - 1;
@@ -81,10 +112,75 @@ TubeLayer ShadeTube(const Camera& camera, const RayTable& rays, const TubeRaster
                                      axis.arc_length[j], direction);
       layer.coverage.at<float>(v - rect.y, u - rect.x) = coverage;
       layer.colour.at<cv::Vec3f>(v - rect.y, u - rect.x) =
-          ShadedColour(options, scene, light_cam, surface);
+          ShadedColour(options, scene, lighting, surface, direction);
     }
   }
   return layer;
+}
+
+// The rays a view's tube is sampled with: the camera's own (one per pixel
+// centre), or with supersampling n its sub-pixel camera's (n × n per pixel).
+struct Samples {
+  const Camera& camera;
+  const RayTable& rays;
+  int n;
+};
+
+// A camera whose pixels are the n × n sub-pixels of `camera`'s: its pixel
+// (n u + i, n v + j) is centred on (u + (i + 0.5) / n - 0.5, v + (j + 0.5) / n - 0.5).
+Camera SubpixelCamera(const Camera& camera, int n) {
+  Camera sub = camera;
+  sub.width = n * camera.width;
+  sub.height = n * camera.height;
+  Mat3 scale;
+  scale << n, 0.0, 0.5 * (n - 1), 0.0, n, 0.5 * (n - 1), 0.0, 0.0, 1.0;
+  sub.camera_matrix = scale * camera.camera_matrix;
+  return sub;
+}
+
+// Coverage and coverage-weighted colour summed over the n × n block at (x, y).
+void SumBlock(const TubeLayer& fine, int n, int x, int y, float* coverage, cv::Vec3f* weighted) {
+  for (int j = 0; j < n; ++j) {
+    const float* fine_coverage = fine.coverage.ptr<float>(n * y + j, n * x);
+    const cv::Vec3f* fine_colour = fine.colour.ptr<cv::Vec3f>(n * y + j, n * x);
+    for (int i = 0; i < n; ++i) {
+      *coverage += fine_coverage[i];
+      *weighted += fine_colour[i] * fine_coverage[i];
+    }
+  }
+}
+
+// A sub-pixel layer's n × n blocks averaged into pixels: the pixel's coverage
+// is its sub-pixels' mean and its colour their coverage-weighted mean, so it
+// blends what they show as a camera pixel integrates the light on it.
+TubeLayer AverageBlocks(const TubeLayer& fine, int n) {
+  const cv::Size size(fine.coverage.cols / n, fine.coverage.rows / n);
+  TubeLayer layer{cv::Mat(size, CV_32F, cv::Scalar(0)),
+                  cv::Mat(size, CV_32FC3, cv::Scalar::all(0))};
+  const auto samples = static_cast<float>(n * n);
+  for (int y = 0; y < size.height; ++y) {
+    for (int x = 0; x < size.width; ++x) {
+      float coverage = 0.0f;
+      cv::Vec3f weighted(0.0f, 0.0f, 0.0f);
+      SumBlock(fine, n, x, y, &coverage, &weighted);
+      if (coverage <= 0.0f) continue;
+      layer.coverage.at<float>(y, x) = coverage / samples;
+      layer.colour.at<cv::Vec3f>(y, x) = weighted / coverage;
+    }
+  }
+  return layer;
+}
+
+// The tube's layer over `rect` (image pixels) from a raster of the samples' rays.
+TubeLayer SampledLayer(const Samples& samples, const TubeRaster& raster, const TubeAxis& axis,
+                       const TubeScene& scene, const RenderOptions& options, const cv::Rect& rect) {
+  if (samples.n == 1) {
+    return ShadeTube(samples.camera, samples.rays, raster, axis, scene, options, rect);
+  }
+  const int n = samples.n;
+  const cv::Rect fine(n * rect.x, n * rect.y, n * rect.width, n * rect.height);
+  return AverageBlocks(ShadeTube(samples.camera, samples.rays, raster, axis, scene, options, fine),
+                       n);
 }
 
 // Fraction of the backdrop's light left by the shadow over `out` (image
@@ -135,14 +231,16 @@ cv::Vec3f BackdropBgr(const RenderOptions& options) {
           static_cast<float>(options.backdrop_bgr[2])};
 }
 
-// The frame (backdrop, shadow, tube) over `rect` of `image`, with noise
-// drawn row by row across the rect. `tube` and `shadow` cover the rect.
+// The frame (backdrop, shadow, tube) over `rect` of `image`, exposed by the
+// gain, with noise drawn row by row across the rect. `tube` and `shadow`
+// cover the rect.
 void ComposeImage(const Camera& camera, const TubeLayer& tube, const cv::Mat& shadow,
                   const cv::Rect& rect, const RenderOptions& options, uint64_t seed,
                   cv::Mat* image) {
   GaussianNoise noise(options.noise_sigma, MixSeed(seed, 0));
   const Vignette vignette(camera, options.backdrop_vignette);
   const cv::Vec3f backdrop = BackdropBgr(options);
+  const auto gain = static_cast<float>(options.exposure_gain);
   for (int y = 0; y < rect.height; ++y) {
     const int v = rect.y + y;
     const float* coverage = tube.coverage.ptr<float>(y);
@@ -151,7 +249,8 @@ void ComposeImage(const Camera& camera, const TubeLayer& tube, const cv::Mat& sh
     cv::Vec3b* out = image->ptr<cv::Vec3b>(v) + rect.x;
     for (int x = 0; x < rect.width; ++x) {
       const cv::Vec3f lit = backdrop * vignette.at(rect.x + x, v);
-      const cv::Vec3f seen = lit * (light[x] * (1.0f - coverage[x])) + colour[x] * coverage[x];
+      const cv::Vec3f seen =
+          (lit * (light[x] * (1.0f - coverage[x])) + colour[x] * coverage[x]) * gain;
       for (int c = 0; c < 3; ++c) out[x][c] = cv::saturate_cast<uint8_t>(seen[c] + noise.Next());
     }
   }
@@ -174,12 +273,23 @@ cv::Mat Backdrop(const Camera& camera, const RenderOptions& options, uint64_t se
   return background;
 }
 
-RenderedView RenderView(const Camera& camera, const RayTable& rays, const TubeAxis& axis,
+// The tube's layer over the whole image. `centres` is the raster of the
+// pixel centres, the samples' own when there is one a pixel.
+TubeLayer WholeLayer(const Samples& samples, const TubeRaster& centres, const TubeAxis& axis,
+                     const TubeScene& scene, const RenderOptions& options, const cv::Rect& whole) {
+  if (samples.n == 1) return SampledLayer(samples, centres, axis, scene, options, whole);
+  TubeRaster fine;
+  RasterizeTube(samples.camera, samples.rays, axis, &fine);
+  return SampledLayer(samples, fine, axis, scene, options, whole);
+}
+
+RenderedView RenderView(const Samples& centres, const Samples& samples, const TubeAxis& axis,
                         const TubeScene& scene, const RenderOptions& options, uint64_t seed) {
+  const Camera& camera = centres.camera;
   TubeRaster raster;
-  RasterizeTube(camera, rays, axis, &raster);
+  RasterizeTube(camera, centres.rays, axis, &raster);
   const cv::Rect whole(0, 0, camera.width, camera.height);
-  const TubeLayer tube = ShadeTube(camera, rays, raster, axis, scene, options, whole);
+  const TubeLayer tube = WholeLayer(samples, raster, axis, scene, options, whole);
   RenderedView view;
   view.image.create(camera.height, camera.width, CV_8UC3);
   ComposeImage(camera, tube, ShadowFactor(tube.coverage, {0, 0}, whole, options), whole, options,
@@ -215,11 +325,19 @@ struct BackdropPool {
   }
 };
 
+// The image pixels holding the samples the raster may cover (n × n a pixel);
+// empty when the tube is out of view.
+cv::Rect TubePixels(const TubeRaster& raster, int n) {
+  if (raster.u0 > raster.u1) return {};
+  return {raster.u0 / n, raster.v0 / n, raster.u1 / n - raster.u0 / n + 1,
+          raster.v1 / n - raster.v0 / n + 1};
+}
+
 // The pixels the tube and its shadow can change, widened to even coordinates
 // (the shadow's half resolution); empty when the tube is out of view.
-cv::Rect TubeAndShadowRect(const TubeRaster& raster, const RenderOptions& options) {
-  if (raster.u0 > raster.u1) return {};
-  const cv::Rect tube(raster.u0, raster.v0, raster.u1 - raster.u0 + 1, raster.v1 - raster.v0 + 1);
+cv::Rect TubeAndShadowRect(const cv::Rect& tube, const Camera& camera,
+                           const RenderOptions& options) {
+  if (tube.empty()) return {};
   // The blur's kernel reaches 4 sigma (OpenCV's float kernels), sigma being
   // half the blur at half resolution: 2 blur px at full resolution; 4 px
   // more for the bilinear warp, the area resize and the rounding to even.
@@ -236,19 +354,20 @@ cv::Rect TubeAndShadowRect(const TubeRaster& raster, const RenderOptions& option
   }
   const int x0 = std::max(0, rect.x) & ~1;
   const int y0 = std::max(0, rect.y) & ~1;
-  const int x1 = std::min(raster.width, (rect.x + rect.width + 1) & ~1);
-  const int y1 = std::min(raster.height, (rect.y + rect.height + 1) & ~1);
+  const int x1 = std::min(camera.width, (rect.x + rect.width + 1) & ~1);
+  const int y1 = std::min(camera.height, (rect.y + rect.height + 1) & ~1);
   return {x0, y0, x1 - x0, y1 - y0};
 }
 
-// The tube and its shadow drawn over the backdrop in `image`.
-void DrawTubeOver(const Camera& camera, const RayTable& rays, const TubeAxis& axis,
+// The tube and its shadow drawn over the backdrop in `image` of `camera`,
+// sampled by `samples`; `raster` is the samples'.
+void DrawTubeOver(const Camera& camera, const Samples& samples, const TubeAxis& axis,
                   const TubeScene& scene, const RenderOptions& options, uint64_t seed,
                   TubeRaster* raster, cv::Mat* image) {
-  RasterizeTube(camera, rays, axis, raster);
-  const cv::Rect rect = TubeAndShadowRect(*raster, options);
+  RasterizeTube(samples.camera, samples.rays, axis, raster);
+  const cv::Rect rect = TubeAndShadowRect(TubePixels(*raster, samples.n), camera, options);
   if (rect.empty()) return;
-  const TubeLayer tube = ShadeTube(camera, rays, *raster, axis, scene, options, rect);
+  const TubeLayer tube = SampledLayer(samples, *raster, axis, scene, options, rect);
   ComposeImage(camera, tube, ShadowFactor(tube.coverage, rect.tl(), rect, options), rect, options,
                seed, image);
 }
@@ -265,11 +384,34 @@ void CheckInputs(const TubeScene& scene, const RenderOptions& options) {
 
 }  // namespace
 
+// One camera's sub-pixel camera and its rays.
+struct SubpixelRays {
+  Camera camera;
+  RayTable rays;
+};
+
 struct SceneRenderer::Impl {
   Rig rig;
   std::vector<RayTable> rays;  // per camera
   std::mutex pools_mutex;
   std::vector<BackdropPool> pools;  // per camera, built on first use
+  std::mutex subpixel_mutex;
+  // By camera and supersampling, built on first use and never erased, so
+  // references to them stay valid (std::map's nodes do not move).
+  std::map<std::pair<size_t, int>, SubpixelRays> subpixel;
+
+  Samples Centres(size_t camera) const { return {rig.cameras[camera], rays[camera], 1}; }
+
+  Samples SamplesOf(size_t camera, int n) {
+    if (n == 1) return Centres(camera);
+    std::lock_guard lock(subpixel_mutex);
+    auto [entry, added] = subpixel.try_emplace({camera, n});
+    if (added) {
+      entry->second.camera = SubpixelCamera(rig.cameras[camera], n);
+      entry->second.rays = BuildRayTable(entry->second.camera);
+    }
+    return {entry->second.camera, entry->second.rays, n};
+  }
 };
 
 SceneRenderer::SceneRenderer(const Rig& rig) : impl_(std::make_unique<Impl>()) {
@@ -289,8 +431,8 @@ std::vector<RenderedView> SceneRenderer::Render(const TubeScene& scene,
   std::vector<RenderedView> views;
   views.reserve(impl_->rig.cameras.size());
   for (size_t i = 0; i < impl_->rig.cameras.size(); ++i) {
-    views.push_back(
-        RenderView(impl_->rig.cameras[i], impl_->rays[i], axis, scene, options, MixSeed(seed, i)));
+    views.push_back(RenderView(impl_->Centres(i), impl_->SamplesOf(i, options.supersampling), axis,
+                               scene, options, MixSeed(seed, i)));
   }
   return views;
 }
@@ -299,8 +441,9 @@ cv::Mat SceneRenderer::RenderImage(size_t camera, const TubeScene& scene,
                                    const RenderOptions& options, uint32_t seed) const {
   CheckInputs(scene, options);
   const Camera& model = impl_->rig.cameras.at(camera);
+  const Samples samples = impl_->SamplesOf(camera, options.supersampling);
   if (model.width % 2 != 0 || model.height % 2 != 0) {
-    return RenderView(model, impl_->rays[camera], TubeAxisOf(scene), scene, options,
+    return RenderView(impl_->Centres(camera), samples, TubeAxisOf(scene), scene, options,
                       MixSeed(seed, camera))
         .image;
   }
@@ -312,10 +455,12 @@ cv::Mat SceneRenderer::RenderImage(size_t camera, const TubeScene& scene,
     if (!pool.Fits(options)) pool.Build(model, options);
     pool.frames[MixSeed(view_seed, 7) % pool.frames.size()].copyTo(image);
   }
-  // Reused across calls on this thread: the raster is 16 bytes a pixel.
+  // The pool is the background's exposure: scaled here, not rebuilt, so an
+  // exposure that flickers from image to image costs one pass, not a pool.
+  if (options.exposure_gain != 1.0) image.convertTo(image, -1, options.exposure_gain);
+  // Reused across calls on this thread: the raster is 16 bytes a sample.
   thread_local TubeRaster raster;
-  DrawTubeOver(model, impl_->rays[camera], TubeAxisOf(scene), scene, options, view_seed, &raster,
-               &image);
+  DrawTubeOver(model, samples, TubeAxisOf(scene), scene, options, view_seed, &raster, &image);
   return image;
 }
 

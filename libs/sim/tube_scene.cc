@@ -21,6 +21,29 @@ std::string CheckColour(const std::string& key, const std::array<double, 3>& bgr
   return {};
 }
 
+// The shading model's name and its parameters.
+std::string CheckShading(const RenderOptions& options) {
+  if (options.shading != "lambert" && options.shading != "wrap" && options.shading != "phong") {
+    return "shading: expected lambert, wrap or phong, got " + options.shading;
+  }
+  if (!(options.wrap >= 0.0 && options.wrap <= 1.0))
+    return Describe("wrap", "a number in [0, 1]", options.wrap);
+  if (!(options.specular >= 0.0 && options.specular <= 1.0))
+    return Describe("specular", "a number in [0, 1]", options.specular);
+  if (!(options.shininess >= 1.0 && options.shininess <= 1000.0))
+    return Describe("shininess", "a number in [1, 1000]", options.shininess);
+  return {};
+}
+
+// What the camera does with the light: exposure and rays per pixel.
+std::string CheckExposure(const RenderOptions& options) {
+  if (!(options.exposure_gain >= 0.5 && options.exposure_gain <= 2.0))
+    return Describe("exposure_gain", "a number in [0.5, 2]", options.exposure_gain);
+  if (options.supersampling < 1 || options.supersampling > 4)
+    return Describe("supersampling", "an integer in 1-4", options.supersampling);
+  return {};
+}
+
 }  // namespace
 
 GroundTruth TruthOf(const TubeScene& scene) {
@@ -53,6 +76,8 @@ std::string RenderOptions::Validate() const {
     return Describe("ambient", "a number in [0, 2]", ambient);
   if (!(diffuse >= 0.0 && diffuse <= 2.0))
     return Describe("diffuse", "a number in [0, 2]", diffuse);
+  if (std::string error = CheckShading(*this); !error.empty()) return error;
+  if (std::string error = CheckExposure(*this); !error.empty()) return error;
   if (!(noise_sigma >= 0.0 && noise_sigma <= 50.0)) {
     return Describe("noise_sigma", "a number in [0, 50]", noise_sigma);
   }
@@ -67,6 +92,12 @@ std::string RenderOptions::Validate() const {
     return Describe("shadow_blur_px", "a number in [0, 50]", shadow_blur_px);
   }
   return {};
+}
+
+ShadingModel RenderOptions::shading_model() const {
+  if (shading == "wrap") return ShadingModel::kWrap;
+  if (shading == "phong") return ShadingModel::kPhong;
+  return ShadingModel::kLambert;
 }
 
 }  // namespace shapesense
