@@ -44,6 +44,8 @@ constexpr double kReadStepPx = 0.35;
 // Without a configured width, bands of these widths are accepted, mm.
 constexpr double kMinUnknownWidth = 1.0;
 constexpr double kMaxUnknownWidth = 12.0;
+// What other parts of the tube hide is worked out this far apart, mm.
+constexpr double kHiddenStep = 1.0;
 // A view needs this many lines that agree.
 constexpr int kMinLines = 3;
 // A line's edge is off by up to half a pixel (the labels are binary); the
@@ -138,6 +140,17 @@ void ReadLine(const Camera& camera, const cv::Mat& labels, const Polyline& cente
   }
 }
 
+// The reads where another part hides the band become unreadable.
+void ForgetHidden(const std::vector<bool>& hidden, double step, std::vector<double>* share) {
+  for (size_t i = 0; i < share->size(); ++i) {
+    const auto bucket =
+        static_cast<size_t>(std::lround(static_cast<double>(i) * step / kHiddenStep));
+    if (bucket < hidden.size() && hidden[bucket]) {
+      (*share)[i] = std::numeric_limits<double>::quiet_NaN();
+    }
+  }
+}
+
 // The run of tape nearest the seed on one line, its edges where the share
 // crosses one half: [low, high] in mm, or nullopt when the run does not end
 // on readable body at both sides within the window.
@@ -175,29 +188,40 @@ bool PlausibleWidth(double width, const BandWindow& window, double mm_per_px) {
   return std::abs(width - window.width) <= 0.3 * window.width + 2.0 * mm_per_px;
 }
 
-// True when another part of the tube, farther along it than a few radii,
-// crosses the rays from the camera to the band's window: its labels there
-// would be that part's.
-bool OtherPartInFront(const Camera& camera, const Polyline& centerline,
-                      const std::vector<double>& arc, const BandWindow& window, double radius) {
-  constexpr double kRayStep = 2.5;   // mm between the rays tested
+// Where another part of the tube lies between the camera and the band's
+// window, every kHiddenStep mm from window.first: the labels there are that
+// part's. The rays start on the surface line facing the camera; a part whose
+// axis passes within a radius of one enters the tube in front, and the lines
+// read up to r·sin(kMaxLineAngle) to either side, so those are hidden too.
+// The tube's own continuation is left out as far as a ray leaving its surface
+// can pass near its axis: farther the more nearly the view runs along it.
+std::vector<bool> HiddenAlongWindow(const Camera& camera, const Polyline& centerline,
+                                    const std::vector<double>& arc, const BandWindow& window,
+                                    double radius) {
   constexpr double kPartStep = 2.0;  // mm between the other parts' points
-  const double reach = 2.0 * radius + 0.5 * std::max(kRayStep, kPartStep) + 0.5;
-  const double keep_out = 4.0 * radius;
+  const double reach = radius * (1.0 + std::sin(kMaxLineAngle)) + 0.5 * kPartStep + 0.2;
   const Vec3 c = camera.Center();
-  for (double s = window.first; s <= window.last + 1e-9; s += kRayStep) {
-    const Vec3 target = PointAtArcLength(centerline, arc, s);
-    const Vec3 ray = target - c;
+  const Vec3 tangent = ChordTangent(centerline, arc, window.seed, 1.0);
+  const Vec3 to_camera = (c - PointAtArcLength(centerline, arc, window.seed)).normalized();
+  const double cosine = std::abs(tangent.dot(to_camera));
+  const double sine = std::max(tangent.cross(to_camera).norm(), 0.2);
+  const double keep_out = std::max(2.0 * radius, (reach - radius * cosine) / sine + kPartStep);
+  std::vector<bool> hidden;
+  for (double s = window.first; s <= window.last + kHiddenStep; s += kHiddenStep) {
+    const double at = std::min(s, window.last);
+    const Vec3 start = SurfacePoint(centerline, arc, at, radius, c, 0.0);
+    const Vec3 ray = c - start;
     const double length_sq = ray.squaredNorm();
-    for (double t = 0.0; t <= arc.back(); t += kPartStep) {
-      if (t > window.first - keep_out && t < window.last + keep_out) continue;
-      const Vec3 other = PointAtArcLength(centerline, arc, t) - c;
+    bool behind_another = false;
+    for (double t = 0.0; t <= arc.back() && !behind_another; t += kPartStep) {
+      if (std::abs(t - at) < keep_out) continue;
+      const Vec3 other = PointAtArcLength(centerline, arc, t) - start;
       const double along = other.dot(ray) / length_sq;
-      if (along <= 0.0 || along >= 1.0) continue;
-      if ((other - along * ray).norm() < reach) return true;
+      behind_another = along > 0.0 && along < 1.0 && (other - along * ray).norm() < reach;
     }
+    hidden.push_back(behind_another);
   }
-  return false;
+  return hidden;
 }
 
 // The band as one camera sees it; nullopt when it cannot be read there.
@@ -206,7 +230,7 @@ std::optional<ViewBand> ReadBandInView(const Camera& camera, const cv::Mat& labe
                                        const BandWindow& window, double radius) {
   const double px_per_mm = PixelsPerMm(camera, centerline, arc, window, radius);
   if (px_per_mm < 0.2) return std::nullopt;  // along the line of sight: nothing to read
-  if (OtherPartInFront(camera, centerline, arc, window, radius)) return std::nullopt;
+  const std::vector<bool> hidden = HiddenAlongWindow(camera, centerline, arc, window, radius);
   const double mm_per_px = 1.0 / px_per_mm;
   const double step = std::min(kReadStepPx * mm_per_px, 0.25);
   std::vector<double> share;
@@ -215,6 +239,7 @@ std::optional<ViewBand> ReadBandInView(const Camera& camera, const cv::Mat& labe
   for (int k = 0; k < kLines; ++k) {
     const double angle = -kMaxLineAngle + 2.0 * kMaxLineAngle * k / (kLines - 1);
     ReadLine(camera, labels, centerline, arc, window, radius, angle, step, &share);
+    ForgetHidden(hidden, step, &share);
     const std::optional<std::pair<double, double>> edges = EdgesOnLine(share, window, step);
     if (!edges || !PlausibleWidth(edges->second - edges->first, window, mm_per_px)) continue;
     centers.push_back(0.5 * (edges->first + edges->second));
@@ -287,6 +312,24 @@ std::optional<MarkerOnCurve> FuseViews(std::vector<ViewBand> views) {
   return std::nullopt;
 }
 
+// The largest cot θ over the cameras at arc s (θ between the axis and the
+// direction to the camera), at least 1; views nearly along the axis are
+// left to their own check (ReadBandInView).
+double LargestFrontShiftPerRadius(const Rig& rig, const Polyline& centerline,
+                                  const std::vector<double>& arc, double s) {
+  constexpr double kMaxCotangent = 4.0;
+  const Vec3 point = PointAtArcLength(centerline, arc, s);
+  const Vec3 tangent = ChordTangent(centerline, arc, s, 1.0);
+  double largest = 1.0;
+  for (const Camera& camera : rig.cameras) {
+    const Vec3 to_camera = (camera.Center() - point).normalized();
+    const double cotangent =
+        std::abs(tangent.dot(to_camera)) / std::max(tangent.cross(to_camera).norm(), 1e-6);
+    largest = std::max(largest, std::min(cotangent, kMaxCotangent));
+  }
+  return largest;
+}
+
 std::optional<MarkerOnCurve> LocateBand(const Rig& rig, const std::vector<Silhouette>& silhouettes,
                                         const Polyline& centerline, const std::vector<double>& arc,
                                         double radius, const BandWindow& window) {
@@ -311,10 +354,12 @@ void LocateBandsInImages(const Rig& rig, const std::vector<Silhouette>& silhouet
                          const Polyline& centerline, const std::vector<double>& arc, double radius,
                          const BandPrior& prior, std::vector<MarkerOnCurve>* markers) {
   if (silhouettes.size() != rig.cameras.size() || centerline.size() < 2) return;
-  const double half_reach =
-      0.5 * (prior.width > 0.0 ? prior.width : kMaxUnknownWidth) + prior.seed_error;
+  const double half_width = 0.5 * (prior.width > 0.0 ? prior.width : kMaxUnknownWidth);
   std::vector<MarkerOnCurve> located;
   for (const MarkerOnCurve& seed : *markers) {
+    const double half_reach =
+        half_width + prior.seed_error +
+        radius * LargestFrontShiftPerRadius(rig, centerline, arc, seed.arc_length);
     BandWindow window;
     window.seed = seed.arc_length;
     window.first = std::max(0.0, seed.arc_length - half_reach);

@@ -39,9 +39,11 @@ struct BandPrior {
   // else (two bands merged, or another part of the tube across it).
   double width = 0.0;
   // How far a seed (a voxel cluster's centre) may lie from its band's
-  // centre, mm: the carved marker voxels carry the views' front-surface
-  // shifts, up to about a radius.
-  double seed_error = 4.0;
+  // centre, mm, besides the views' front-surface shifts: the carved marker
+  // voxels lie where the cameras see tape, on the surface facing them, up to
+  // radius·cot θ along the axis from the band (θ between the axis and the
+  // view; the window grows by the largest).
+  double seed_error = 2.0;
 };
 
 // Band centres from the tape's edges in the images, to a fraction of a pixel.

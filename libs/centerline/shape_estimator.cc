@@ -393,7 +393,7 @@ ShapeEstimate ShapeEstimator::Estimate(const VoxelCloud& cloud,
   if (refine) {
     BandPrior prior;
     prior.width = options_.band_width;
-    prior.seed_error = estimate.tube_radius + 2.0 * cloud.grid.voxel_size;
+    prior.seed_error = 2.0 * cloud.grid.voxel_size;
     LocateBandsInImages(rig_, silhouettes, estimate.centerline, estimate.arc_length,
                         estimate.tube_radius, prior, &markers);
   }
