@@ -13,6 +13,7 @@
 #include "clients/tools/offline_command.h"
 #include "clients/tools/replay/replay_command.h"
 #include "clients/tools/rig/rig_command.h"
+#include "clients/tools/tape_colour/tape_colour_command.h"
 #include "libs/core/error.h"
 #include "runtime/command_line.h"
 
@@ -23,6 +24,7 @@ int main(int argc, char** argv) {
   shapesense::AddDemoCommand(app);
   shapesense::AddConfigCommand(app);
   shapesense::AddCalibrateCommand(app);
+  shapesense::AddTapeColourCommand(app);
   shapesense::AddEstimateCommand(app);
   shapesense::AddMonitorCommand(app);
   shapesense::AddReplayCommand(app);

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <bit>
 #include <cmath>
+#include <cstddef>
 #include <cstring>
 #include <numbers>
 #include <opencv2/core/check.hpp>
@@ -37,16 +38,11 @@ void CheckInputs(const cv::Mat& image, const cv::Mat& background, const Silhouet
   }
 }
 
-// Smallest red level above both marker_min_red and marker_red_ratio × m, for
-// each m = max(green, blue); 256 when none is.
-std::array<int, 256> MarkerRedNeeded(const SilhouetteOptions& options) {
-  std::array<int, 256> needed{};
-  for (int m = 0; m < 256; ++m) {
-    const double above_ratio = std::floor(options.marker_red_ratio * m) + 1.0;
-    const double red = std::max(above_ratio, options.marker_min_red + 1.0);
-    needed[m] = static_cast<int>(std::min(red, 256.0));
+const SilhouetteOptions& Checked(const SilhouetteOptions& options) {
+  if (const std::string error = options.Validate(); !error.empty()) {
+    throw std::invalid_argument("SilhouetteOptions: " + error);
   }
-  return needed;
+  return options;
 }
 
 }  // namespace
@@ -65,25 +61,17 @@ std::string SilhouetteOptions::Validate() const {
   if (min_component_area < 0) {
     return Expected("min_component_area", "0 or more", min_component_area);
   }
-  if (marker_min_red < 0 || marker_min_red > 255) {
-    return Expected("marker_min_red", "0-255", marker_min_red);
-  }
-  if (!(marker_red_ratio > 1.0 && std::isfinite(marker_red_ratio))) {
-    return Expected("marker_red_ratio", "a number above 1", marker_red_ratio);
-  }
+  if (const std::string error = tape.Validate(); !error.empty()) return "tape." + error;
   return {};
 }
 
-SilhouetteExtractor::SilhouetteExtractor(const SilhouetteOptions& options) : options_(options) {
-  if (const std::string error = options.Validate(); !error.empty()) {
-    throw std::invalid_argument("SilhouetteOptions: " + error);
-  }
+SilhouetteExtractor::SilhouetteExtractor(const SilhouetteOptions& options)
+    : options_(Checked(options)), tape_(options.tape) {
   const double cosine = std::cos(options.shadow_max_angle_deg * std::numbers::pi / 180.0);
   const double scale = static_cast<double>(int64_t{1} << kShadowFixedBits);
   shadow_cos2_fixed_ = std::llround(cosine * cosine * scale);
   shadow_min_brightness2_fixed_ = std::llround(options.shadow_min_brightness_ratio *
                                                options.shadow_min_brightness_ratio * scale);
-  marker_red_needed_ = MarkerRedNeeded(options);
 }
 
 void SilhouetteExtractor::Extract(const cv::Mat& image, const cv::Mat& background,
@@ -136,8 +124,8 @@ void SilhouetteExtractor::RejectShadows(const uint8_t* image_row, const uint8_t*
     uint64_t shadows = 0;  // in a register: no store-to-load chain through candidates[i]
     for (uint64_t left = candidates[i]; left != 0; left &= left - 1) {
       const int bit = std::countr_zero(left);
-      const int x = 64 * i + bit;
-      shadows |= static_cast<uint64_t>(IsShadow(image_row + 3 * x, background_row + 3 * x)) << bit;
+      const ptrdiff_t at = ptrdiff_t{3} * (64 * i + bit);  // BGR bytes into the rows
+      shadows |= static_cast<uint64_t>(IsShadow(image_row + at, background_row + at)) << bit;
     }
     candidates[i] &= ~shadows;
   }
@@ -161,11 +149,10 @@ void SilhouetteExtractor::Paint(const cv::Mat& image, Silhouette* out) const {
   out->area = 0;
   for (const RowRun& run : out->runs) {
     std::memset(out->mask.ptr<uint8_t>(run.y) + run.x0, 255, run.x1 - run.x0);
-    const uint8_t* pixel = image.ptr<uint8_t>(run.y) + 3 * run.x0;
+    const uint8_t* pixel = image.ptr<uint8_t>(run.y) + ptrdiff_t{3} * run.x0;
     uint8_t* label = out->labels.ptr<uint8_t>(run.y);
     for (int x = run.x0; x < run.x1; ++x, pixel += 3) {
-      const bool tape = pixel[2] >= marker_red_needed_[std::max(pixel[0], pixel[1])];
-      label[x] = tape ? kLabelMarker : kLabelBody;
+      label[x] = tape_.IsTape(pixel) ? kLabelMarker : kLabelBody;
     }
     x_min = std::min(x_min, run.x0);
     x_max = std::max(x_max, run.x1 - 1);

@@ -52,11 +52,12 @@ enum class ShadingModel { kLambert, kWrap, kPhong };
 
 // How the scene looks. The tube is the union of capsules (sphere-swept
 // segments) around the lead-in and the centreline, ray-cast exactly per pixel
-// centre (or per sub-pixel, `supersampling`) through the lens model. The default colours suit the
-// silhouette extractor's defaults with margin: the body's and the tapes' green stay at least 75
-// grey levels below the (vignetted) backdrop's under any shading; the tapes pass its red test (red
-// > 90 and > 1.8 × green and blue) everywhere; the shadow only scales the backdrop's colour, so its
-// hue does not change.
+// centre (or per sub-pixel, `supersampling`) through the lens model. The
+// default colours suit the silhouette extractor's defaults with margin: the
+// body's and the tapes' green stay at least 75 grey levels below the
+// (vignetted) backdrop's under any shading; the tapes pass its tape colour
+// test (hue 335-25°, saturation ≥ 0.4, value ≥ 60) everywhere; the shadow
+// only scales the backdrop's colour, so its hue does not change.
 struct RenderOptions {
   std::array<double, 3> backdrop_bgr = {40.0, 175.0, 45.0};
   // Brightness falls off from the image centre to the corners by this fraction.

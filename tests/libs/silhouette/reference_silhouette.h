@@ -72,6 +72,27 @@ inline bool NearShadowLimit(const cv::Vec3b& pixel, const cv::Vec3b& background,
          std::abs(norm_a / norm_b - options.shadow_min_brightness_ratio) < 1e-6;
 }
 
+// The tape colour rule in floating point: the textbook HSV of the pixel
+// against the hue range (wrapping through 0 when from > to) and the minima.
+inline bool ReferenceIsTape(const cv::Vec3b& pixel, const TapeColour& tape) {
+  const double b = pixel[0], g = pixel[1], r = pixel[2];
+  const double high = std::max({b, g, r});
+  const double chroma = high - std::min({b, g, r});
+  if (chroma == 0.0 || high < tape.min_value || chroma / high < tape.min_saturation) return false;
+  double hue = 0.0;
+  if (high == r) {
+    hue = 60.0 * (g - b) / chroma;
+  } else if (high == g) {
+    hue = 60.0 * (b - r) / chroma + 120.0;
+  } else {
+    hue = 60.0 * (r - g) / chroma + 240.0;
+  }
+  if (hue < 0.0) hue += 360.0;
+  const double from = tape.hue_deg[0];
+  const double to = tape.hue_deg[1];
+  return from < to ? hue >= from && hue <= to : hue >= from || hue <= to;
+}
+
 // Threshold of |g - g_bg|, shadow test on the pixels over it, grey-scale
 // closing by the square, components, labels.
 inline void ReferenceSilhouette(const cv::Mat& image, const cv::Mat& background,
@@ -99,9 +120,7 @@ inline void ReferenceSilhouette(const cv::Mat& image, const cv::Mat& background,
   for (int y = 0; y < image.rows; ++y) {
     for (int x = 0; x < image.cols; ++x) {
       if (mask->at<uint8_t>(y, x) == 0) continue;
-      const cv::Vec3b p = image.at<cv::Vec3b>(y, x);
-      const bool tape =
-          p[2] > options.marker_min_red && p[2] > options.marker_red_ratio * std::max(p[0], p[1]);
+      const bool tape = ReferenceIsTape(image.at<cv::Vec3b>(y, x), options.tape);
       labels->at<uint8_t>(y, x) = tape ? kLabelMarker : kLabelBody;
     }
   }

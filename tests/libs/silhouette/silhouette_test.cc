@@ -141,31 +141,32 @@ TEST(SilhouetteTest, TapeIsLabelledAsMarkerOnlyInsideTheMask) {
 }
 
 TEST(SilhouetteTest, MarkerColourRuleFollowsTheOptions) {
-  // One pixel per (red, max(green, blue)) pair; the background's green is
-  // 128 away from every pixel's, so everything is foreground.
+  // Random colours; the background's green is 128 away from every pixel's,
+  // so everything is foreground.
   cv::Mat image(256, 256, CV_8UC3);
-  cv::Mat background(256, 256, CV_8UC3);
-  for (int red = 0; red < 256; ++red) {
-    for (int other = 0; other < 256; ++other) {
-      image.at<cv::Vec3b>(red, other) = cv::Vec3b(
-          static_cast<uint8_t>(other / 2), static_cast<uint8_t>(other), static_cast<uint8_t>(red));
-      background.at<cv::Vec3b>(red, other) = cv::Vec3b(0, static_cast<uint8_t>(other ^ 128), 0);
+  cv::randu(image, 0, 256);
+  cv::Mat background(image.size(), CV_8UC3, cv::Scalar::all(0));
+  for (int y = 0; y < image.rows; ++y) {
+    for (int x = 0; x < image.cols; ++x) {
+      background.at<cv::Vec3b>(y, x)[1] = image.at<cv::Vec3b>(y, x)[1] ^ 128;
     }
   }
   SilhouetteOptions options;
   options.shadow_max_angle_deg = 0.0;
-  options.marker_min_red = 70;
-  options.marker_red_ratio = 1.5;
+  options.tape = {{300.0, 40.0}, 0.3, 50};
   Silhouette silhouette;
   SilhouetteExtractor(options).Extract(image, background, &silhouette);
-  for (int red = 0; red < 256; ++red) {
-    for (int other = 0; other < 256; ++other) {
-      const cv::Vec3b pixel = image.at<cv::Vec3b>(red, other);
-      const bool tape = pixel[2] > 70 && pixel[2] > 1.5 * std::max(pixel[0], pixel[1]);
-      ASSERT_EQ(silhouette.labels.at<uint8_t>(red, other), tape ? kLabelMarker : kLabelBody)
-          << "red " << red << " green " << other;
+  int tape = 0;
+  for (int y = 0; y < image.rows; ++y) {
+    for (int x = 0; x < image.cols; ++x) {
+      const cv::Vec3b pixel = image.at<cv::Vec3b>(y, x);
+      const bool expected = testing::ReferenceIsTape(pixel, options.tape);
+      tape += expected;
+      ASSERT_EQ(silhouette.labels.at<uint8_t>(y, x), expected ? kLabelMarker : kLabelBody)
+          << "pixel " << pixel;
     }
   }
+  EXPECT_GT(tape, 1000) << "the colours should hold tape for the test to label";
 }
 
 cv::Mat GreenDifference(const cv::Mat& image, const cv::Mat& background) {
@@ -405,9 +406,16 @@ TEST(SilhouetteOptionsTest, ValidateNamesTheBadKey) {
       {"shadow_min_brightness_ratio",
        [](SilhouetteOptions& o) { o.shadow_min_brightness_ratio = 1.5; }},
       {"min_component_area", [](SilhouetteOptions& o) { o.min_component_area = -1; }},
-      {"marker_min_red", [](SilhouetteOptions& o) { o.marker_min_red = 256; }},
-      {"marker_red_ratio", [](SilhouetteOptions& o) { o.marker_red_ratio = 1.0; }},
-      {"marker_red_ratio", [](SilhouetteOptions& o) { o.marker_red_ratio = std::nan(""); }},
+      {"tape.hue_deg",
+       [](SilhouetteOptions& o) {
+         o.tape.hue_deg = {335.0, 360.0};
+       }},
+      {"tape.hue_deg",
+       [](SilhouetteOptions& o) {
+         o.tape.hue_deg = {20.0, 20.0};
+       }},
+      {"tape.min_saturation", [](SilhouetteOptions& o) { o.tape.min_saturation = 0.0; }},
+      {"tape.min_value", [](SilhouetteOptions& o) { o.tape.min_value = 256; }},
   };
   for (const Case& c : cases) {
     SilhouetteOptions options;

@@ -3,6 +3,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "libs/geometry/polyline.h"
+#include "libs/silhouette/tape_classifier.h"
 #include "libs/sim/scene_generators.h"
 #include "libs/sim/tube_scene.h"
 #include "tests/libs/sim/sim_test_util.h"
@@ -12,11 +13,10 @@ namespace {
 
 // The silhouette extractor's defaults (libs/silhouette) that the colours must suit.
 constexpr int kGreenMargin = 60;  // twice its foreground threshold of 30
-constexpr int kMarkerMinRed = 90;
-constexpr double kMarkerRedRatio = 1.8;
 
 bool IsRedTape(const cv::Vec3b& bgr) {
-  return bgr[2] > kMarkerMinRed && bgr[2] > kMarkerRedRatio * std::max(bgr[0], bgr[1]);
+  static const TapeClassifier classifier{TapeColour{}};
+  return classifier.IsTape(&bgr[0]);
 }
 
 // Tape pixels of each view: where the frame changes when the tapes are
