@@ -207,7 +207,11 @@ std::string ShapeStage::ExpandSilhouettes(const voxel_cloud_t& voxels, const Sil
            std::to_string(set->views.size());
   }
   out->silhouettes.resize(set->views.size());
-  for (size_t k = 0; k < set->views.size(); ++k) Expand(set->views[k], &out->silhouettes[k]);
+  out->tape_runs = 0;
+  for (size_t k = 0; k < set->views.size(); ++k) {
+    Expand(set->views[k], &out->silhouettes[k]);
+    out->tape_runs += set->views[k].markers.size();
+  }
   return {};
 }
 
@@ -217,6 +221,15 @@ void ShapeStage::SenseConfigurationOf(ShapeOutput* out) const {
   const ShapeEstimate& estimate = out->estimate;
   if (!estimate.valid) {
     out->configuration.reason = "no shape";
+    return;
+  }
+  if (out->refined && out->tape_runs == 0) {
+    // Said apart from "a band hidden": no band can be measured until the
+    // colour is set right, and it is the silhouettes' config that is wrong.
+    out->configuration.reason =
+        "no camera sees any tape: the tape colour of the silhouettes (silhouette.tape: hue_deg, "
+        "min_saturation, min_value) matches no pixel of the tube, or every band is out of view; "
+        "`shapesense tape-colour` learns it from an image";
     return;
   }
   out->configuration =

@@ -146,6 +146,7 @@ struct ShapeOutput {
   // calls, since an expansion into an earlier one clears only what that wrote.
   std::vector<Silhouette> silhouettes;
   bool refined = false;  // the estimate used `silhouettes`
+  size_t tape_runs = 0;  // runs of tape in them, all cameras
   VoxelCloud cloud;
 };
 

@@ -148,6 +148,25 @@ TEST_F(ShapeConfigurationTest, AHiddenBandLeavesNoConfigurationAndTheStatusSaysW
       << note;
 }
 
+// A tape colour that matches nothing leaves the shape without q, and the
+// status says it is the colour, not a band out of view.
+TEST_F(ShapeConfigurationTest, ATapeColourThatMatchesNothingIsNamedAndNoQIsMeasured) {
+  CarvingServiceOptions carving_options = testing::TestCarvingOptions();
+  carving_options.silhouette.tape.hue_deg = {200.0, 240.0};  // blue; the tapes are red
+  CarvingService carving(carving_options, rig_->Setup(), bus_);
+  ShapeService shape(options_, rig_->rig(), bus_, setup_);
+  const shape_t* measured =
+      Measure(Scene(Configuration(0.006, -0.004, 0.01, 0.02)), 60, carving, shape);
+  ASSERT_NE(measured, nullptr);
+  EXPECT_TRUE(measured->valid) << measured->error;
+  EXPECT_EQ(measured->num_markers, 0);
+  EXPECT_FALSE(measured->has_configuration);
+  HandleUntil(bus_, [&] { return !shape.Status(NowUtime()).last_error.empty(); });
+  const std::string note = shape.Status(NowUtime()).last_error;
+  EXPECT_NE(note.find("no camera sees any tape"), std::string::npos) << note;
+  EXPECT_NE(note.find("tape colour"), std::string::npos) << note;
+}
+
 TEST_F(ShapeConfigurationTest, TheShapeStageThatReplaySharesSensesQToo) {
   const CarvingServiceOptions carving_options = testing::TestCarvingOptions();
   const CarvingStage carving(rig_->rig(), rig_->backgrounds(), carving_options.silhouette,
