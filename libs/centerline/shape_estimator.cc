@@ -101,9 +101,9 @@ std::pair<int, double> BaseFace(const VoxelGrid& grid, const VoxelGraph& graph,
   for (const int32_t s : seeds) {
     const std::array<int, 3>& c = graph.coordinates(s);
     for (int axis = 0; axis < 3; ++axis) {
-      if (c[static_cast<size_t>(axis)] == 0) ++touching[static_cast<size_t>(2 * axis)];
+      if (c[static_cast<size_t>(axis)] == 0) ++touching[2 * static_cast<size_t>(axis)];
       if (c[static_cast<size_t>(axis)] == grid.dims[static_cast<size_t>(axis)] - 1) {
-        ++touching[static_cast<size_t>(2 * axis + 1)];
+        ++touching[2 * static_cast<size_t>(axis) + 1];
       }
     }
   }
@@ -351,8 +351,8 @@ void SampleCenterline(const Curve& curve, const ShapeOptions& options, ShapeEsti
   estimate->tip = estimate->centerline.back();
   estimate->length = estimate->arc_length.back();
   // Tangents from the spline itself, at the parameter of each arc length.
-  const auto tangent = [&](double s) {
-    return Vec3(curve.spline.Derivative(Interpolate(estimate->arc_length, params, s)).normalized());
+  const auto tangent = [&](double s) -> Vec3 {
+    return curve.spline.Derivative(Interpolate(estimate->arc_length, params, s)).normalized();
   };
   estimate->curvature = CurvatureByTurningAngle(estimate->arc_length, estimate->length, tangent,
                                                 options.curvature_window);

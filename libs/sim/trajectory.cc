@@ -141,7 +141,7 @@ std::string TrajectoryOptions::Validate() const {
   }
   double shortest = std::numeric_limits<double>::infinity();
   for (const TrajectoryKeyframe& key : Keyframes()) shortest = std::min(shortest, key.length);
-  if (const std::string error = TapesFit(tapes, shortest); !error.empty()) return error;
+  if (std::string error = TapesFit(tapes, shortest); !error.empty()) return error;
   if (!(spacing >= 0.05 && spacing <= 0.5)) return Expected("spacing", "0.05-0.5 mm", spacing);
   if (const std::string error = render.Validate(); !error.empty()) return "render." + error;
   return "";

@@ -21,9 +21,9 @@ namespace {
 
 cv::Mat RandomBgr(std::mt19937& rng, int width, int height) {
   cv::Mat image(height, width, CV_8UC3);
-  for (auto it = image.begin<cv::Vec3b>(); it != image.end<cv::Vec3b>(); ++it) {
-    *it = cv::Vec3b(static_cast<uint8_t>(rng()), static_cast<uint8_t>(rng()),
-                    static_cast<uint8_t>(rng()));
+  for (cv::Vec3b& pixel : cv::Mat_<cv::Vec3b>(image)) {
+    pixel = cv::Vec3b(static_cast<uint8_t>(rng()), static_cast<uint8_t>(rng()),
+                      static_cast<uint8_t>(rng()));
   }
   return image;
 }

@@ -208,7 +208,7 @@ TEST(ShapeMessageConfigurationTest, QGoesInAndOutAndMustBeFinite) {
   EXPECT_EQ(MessageConfiguration(message), q);
   EXPECT_EQ(message.configuration_residual_mm, 0.05);
   message.q[2] = std::nan("");
-  EXPECT_NE(ValidateShapeMessage(message).find("q"), std::string::npos);
+  EXPECT_NE(ValidateShapeMessage(message).find('q'), std::string::npos);
   message.has_configuration = false;  // q is not read then
   EXPECT_EQ(ValidateShapeMessage(message), "");
 }
@@ -221,12 +221,14 @@ TEST_F(ShapeConfigurationTest, TheSectionAndTheSetupMustAgree) {
 }
 
 class ShapeConfigurationFilesTest : public ::testing::Test {
+ public:
+  ~ShapeConfigurationFilesTest() override { fs::remove_all(dir_); }
+
  protected:
   ShapeConfigurationFilesTest()
       : dir_(fs::temp_directory_path() / ("shape_configuration_test_" + std::to_string(getpid()))) {
     fs::create_directories(dir_ / "models");
   }
-  ~ShapeConfigurationFilesTest() override { fs::remove_all(dir_); }
 
   // A shape config in dir_ with the given configuration section; the model
   // (config/manipulator.yaml) at models/arm.yaml, referred to relatively.
