@@ -46,28 +46,29 @@ struct BandPrior {
   double seed_error = 2.0;
 };
 
-// Band centres from the tape's edges in the images, to a fraction of a pixel.
+// Band centres from the tape's edges in the images, to a fraction of a pixel
+// (docs/tape.md).
 //
-// In each camera the tube's visible surface is read along several of its
-// lines (generators) spread across the half facing the camera: points at
-// arc s on the surface, c(s) + r·(cos φ·u + sin φ·v), u towards the camera,
-// projected through the lens. The band's two edges are where the tape
-// fraction (bilinear in the labels) crosses one half along each line. A
-// surface line needs no correction for the tube's radius and holds on bends,
-// where the band's edge is a circle in the plane normal to the axis; reading
-// the labels bilinearly and averaging lines of different pixel phases makes
-// the edges sub-pixel.
+// In each camera the tube's visible surface is read along five of its lines
+// (generators), at ±45° about the one facing the camera: points at arc s on
+// the surface, c(s) + r·(cos φ·u + sin φ·v), u towards the camera. A band's
+// edge is a circle in the plane normal to the axis, so each line crosses it
+// exactly at the edge's arc length: no correction for the radius, and it
+// holds on bends. Along a line the labels are read bilinearly (tape 1, body
+// 0) outwards from the seed; each end of the run of tape is refined by
+// bisection to where the share crosses one half. Lines of different pixel
+// phases averaged make the centre sub-pixel.
 //
-// A view counts when its lines agree, both edges lie inside the image and on
-// the body, the band's width is plausible, and no other part of the tube lies
-// between the camera and the band. Its centre's standard error comes from
-// the lines' spread and the label's quantisation in mm along the tube (a
-// foreshortened view, nearly along the axis, spans many mm per pixel and
-// weighs little). The views are fused by their inverse variances; with three
-// or more, one that disagrees with the others is dropped; two that disagree
-// leave the band ambiguous. A band no view places, or an ambiguous one, is
-// removed: it is reported missing, never placed from the voxels alone.
-// Markers stay ordered base → tip.
+// Reads where another part of the tube lies between the camera and the
+// surface are unreadable. A line counts when its run ends on readable body
+// at both sides and has a plausible width; a view, when enough of its lines
+// agree; its centre's standard error comes from their spread and the labels'
+// quantisation in mm along the tube (a foreshortened view, nearly along the
+// axis, spans many mm per pixel and weighs little). The views are fused by
+// their inverse variances; with three or more, one that disagrees with the
+// others is dropped; two that disagree leave the band ambiguous. A band no
+// view places, or an ambiguous one, is removed: it is reported missing,
+// never placed from the voxels alone. Markers stay ordered base → tip.
 void LocateBandsInImages(const Rig& rig, const std::vector<Silhouette>& silhouettes,
                          const Polyline& centerline, const std::vector<double>& arc, double radius,
                          const BandPrior& prior, std::vector<MarkerOnCurve>* markers);
