@@ -67,7 +67,7 @@ struct BandWindow {
 struct ViewBand {
   double center = 0.0;
   double width = 0.0;
-  double std = 0.0;
+  double standard_error = 0.0;  // of the centre, mm
 };
 
 // The tube's cross-section at arc s as a camera sees it: the axis point, and
@@ -306,11 +306,12 @@ std::vector<bool> HiddenNodes(const Camera& camera, const TubeParts& parts,
   const double fan = reach + 0.5 * (last - first) + kPartStep;
   std::vector<bool> hidden(images.front.size(), false);
   for (size_t p = 0; p < parts.arc.size(); ++p) {
+    // The tube's own continuation, on either side of the whole window.
     const double t = parts.arc[p];
     if (t > first - keep_out && t < last + keep_out) continue;
     if (DistanceToSegment(parts.point[p], c, images.front[middle]) > fan) continue;
     for (size_t k = 0; k < images.front.size(); ++k) {
-      if (hidden[k] || std::abs(t - images.node_arc[k]) < keep_out) continue;
+      if (hidden[k]) continue;
       const Vec3 ray = c - images.front[k];
       const Vec3 other = parts.point[p] - images.front[k];
       const double along = other.dot(ray) / ray.squaredNorm();
@@ -385,19 +386,20 @@ std::optional<MarkerOnCurve> FuseViews(std::vector<ViewBand> views) {
     double center = 0.0;
     double width = 0.0;
     for (const ViewBand& v : views) {
-      const double w = 1.0 / (v.std * v.std);
+      const double w = 1.0 / (v.standard_error * v.standard_error);
       weights += w;
       center += w * v.center;
       width += w * v.width;
     }
     center /= weights;
     width /= weights;
-    const double std = 1.0 / std::sqrt(weights);
+    const double standard_error = 1.0 / std::sqrt(weights);
     size_t worst = 0;
     double worst_score = 0.0;
     for (size_t i = 0; i < views.size(); ++i) {
       const double off = std::abs(views[i].center - center);
-      const double score = off < kMinDisagreement ? 0.0 : off / std::hypot(views[i].std, std);
+      const double score =
+          off < kMinDisagreement ? 0.0 : off / std::hypot(views[i].standard_error, standard_error);
       if (score > worst_score) {
         worst_score = score;
         worst = i;
@@ -406,7 +408,7 @@ std::optional<MarkerOnCurve> FuseViews(std::vector<ViewBand> views) {
     if (worst_score <= kMaxNormalisedDisagreement) {
       MarkerOnCurve marker;
       marker.arc_length = center;
-      marker.std_mm = std;
+      marker.std_mm = standard_error;
       marker.width = width;
       marker.views = static_cast<int>(views.size());
       return marker;
